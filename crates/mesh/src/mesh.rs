@@ -1,0 +1,86 @@
+//! `TriMesh`: an indexed triangle mesh with `f64` positions.
+
+use crate::error::MeshError;
+use crate::math::{Real, Vec3, bounding_box, triangle_area, triangle_cross};
+
+/// A triangle: three vertex indices, counter-clockwise seen from outside.
+pub type Face = [u32; 3];
+
+/// An indexed triangle mesh. `faces` index into `positions`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TriMesh {
+    pub positions: Vec<Vec3>,
+    pub faces: Vec<Face>,
+}
+
+impl TriMesh {
+    /// Builds a mesh, checking that every face index is in range and every coordinate is
+    /// finite. `name` is used in error messages (a pose name or file stem).
+    pub fn try_new(positions: Vec<Vec3>, faces: Vec<Face>, name: &str) -> Result<Self, MeshError> {
+        crate::validate::check_finite(&positions, name)?;
+        crate::validate::check_face_indices(&faces, positions.len())?;
+        Ok(Self { positions, faces })
+    }
+
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    pub fn face_count(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// The three corner positions of face `f`.
+    #[inline]
+    pub fn corners(&self, f: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.faces[f];
+        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+    }
+
+    /// Unit normal of face `f` (zero for a degenerate face).
+    pub fn face_normal(&self, f: usize) -> Vec3 {
+        let [a, b, c] = self.corners(f);
+        triangle_cross(&a, &b, &c).try_normalize(0.0).unwrap_or_else(Vec3::zeros)
+    }
+
+    /// Area of face `f`, in squared input units.
+    pub fn face_area(&self, f: usize) -> Real {
+        let [a, b, c] = self.corners(f);
+        triangle_area(&a, &b, &c)
+    }
+
+    /// Total surface area.
+    pub fn area(&self) -> Real {
+        (0..self.faces.len()).map(|f| self.face_area(f)).sum()
+    }
+
+    /// Axis-aligned bounding box `(min, max)`; `None` for an empty mesh.
+    pub fn bounding_box(&self) -> Option<(Vec3, Vec3)> {
+        bounding_box(&self.positions)
+    }
+
+    /// Length of the bounding-box diagonal (0 for an empty mesh). Relative errors in
+    /// reports are given as fractions of this length.
+    pub fn diagonal(&self) -> Real {
+        self.bounding_box().map_or(0.0, |(lo, hi)| (hi - lo).norm())
+    }
+
+    /// Area-weighted vertex normals (unit length; zero for isolated vertices).
+    pub fn vertex_normals(&self) -> Vec<Vec3> {
+        let mut normals = vec![Vec3::zeros(); self.positions.len()];
+        for &[a, b, c] in &self.faces {
+            let n = triangle_cross(
+                &self.positions[a as usize],
+                &self.positions[b as usize],
+                &self.positions[c as usize],
+            );
+            for v in [a, b, c] {
+                normals[v as usize] += n;
+            }
+        }
+        for n in &mut normals {
+            *n = n.try_normalize(0.0).unwrap_or_else(Vec3::zeros);
+        }
+        normals
+    }
+}

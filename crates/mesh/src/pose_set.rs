@@ -1,0 +1,93 @@
+//! `PoseSet`: N registered poses of one body — one shared triangle list, one position
+//! array per pose, vertex `i` the same body point in every pose.
+
+use crate::error::MeshError;
+use crate::math::Vec3;
+use crate::mesh::{Face, TriMesh};
+
+/// A registered pose set. Construct it with [`PoseSet::try_new`], which enforces the
+/// invariants below; the fields are public for reading and for stages that replace
+/// whole arrays consistently.
+///
+/// **Invariants:** `names.len() == poses.len() >= 1`; every pose has the same vertex
+/// count; every face index is in range; every coordinate is finite;
+/// `template < poses.len()`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseSet {
+    /// One name per pose (the file stem), in pose order.
+    pub names: Vec<String>,
+    /// Vertex positions per pose: `poses[pose][vertex]`.
+    pub poses: Vec<Vec<Vec3>>,
+    /// The triangle list shared by all poses.
+    pub faces: Vec<Face>,
+    /// Index of the template pose (the paper's "A" pose) in `poses`.
+    pub template: usize,
+}
+
+impl PoseSet {
+    /// Builds a pose set, checking every invariant. Errors name the offending pose and
+    /// vertex or face.
+    pub fn try_new(
+        names: Vec<String>,
+        poses: Vec<Vec<Vec3>>,
+        faces: Vec<Face>,
+        template: usize,
+    ) -> Result<Self, MeshError> {
+        if poses.is_empty() {
+            return Err(MeshError::NoPoses);
+        }
+        assert_eq!(names.len(), poses.len(), "one name per pose");
+        if template >= poses.len() {
+            return Err(MeshError::TemplateOutOfRange { template, poses: poses.len() });
+        }
+        let expected = poses[template].len();
+        if expected == 0 || faces.is_empty() {
+            return Err(MeshError::Empty { vertices: expected, faces: faces.len() });
+        }
+        for (name, pose) in names.iter().zip(&poses) {
+            if pose.len() != expected {
+                return Err(MeshError::VertexCountMismatch {
+                    pose: name.clone(),
+                    template: names[template].clone(),
+                    expected,
+                    found: pose.len(),
+                });
+            }
+            crate::validate::check_finite(pose, name)?;
+        }
+        crate::validate::check_face_indices(&faces, expected)?;
+        Ok(Self { names, poses, faces, template })
+    }
+
+    pub fn pose_count(&self) -> usize {
+        self.poses.len()
+    }
+
+    pub fn vertex_count(&self) -> usize {
+        self.poses[self.template].len()
+    }
+
+    pub fn face_count(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// The template's positions.
+    pub fn template_positions(&self) -> &[Vec3] {
+        &self.poses[self.template]
+    }
+
+    /// The template as a standalone mesh (copies positions and faces).
+    pub fn template_mesh(&self) -> TriMesh {
+        self.pose_mesh(self.template)
+    }
+
+    /// Pose `pose` as a standalone mesh (copies positions and faces).
+    pub fn pose_mesh(&self, pose: usize) -> TriMesh {
+        TriMesh { positions: self.poses[pose].clone(), faces: self.faces.clone() }
+    }
+
+    /// Index of the pose named `name`, if any.
+    pub fn pose_index(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| n == name)
+    }
+}

@@ -1,0 +1,1 @@
+//! Stage 2: per-vertex deformation saliency from the fit residuals (paper §3.1).

@@ -1,0 +1,2 @@
+//! `desal`: the driver binary.
+fn main() {}
