@@ -1,0 +1,64 @@
+//! On-disk payload structs, one per artifact kind and format version. They use plain
+//! arrays (no math-library types) so that the byte format depends on nothing but this
+//! file; conversions to the in-memory types live beside them.
+//!
+//! **Invariant:** changing a field here is a format change: bump that kind's version in
+//! `ArtifactKind::current_version`, freeze the old struct, add a fixture under
+//! `tests/fixtures/` and a test that it still loads or is refused clearly.
+
+use desal_mesh::math::{vec3_from_f32, vec3_to_f32};
+use desal_mesh::{MeshError, PartLabels, PoseSet};
+use serde::{Deserialize, Serialize};
+
+use super::{ArtifactBody, ArtifactKind};
+
+/// A validated pose set. Positions are stored as f32 (the precision of the source files).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PoseSetV1 {
+    pub names: Vec<String>,
+    pub template: u32,
+    pub faces: Vec<[u32; 3]>,
+    /// `positions[pose][vertex]`.
+    pub positions: Vec<Vec<[f32; 3]>>,
+}
+
+impl ArtifactBody for PoseSetV1 {
+    const KIND: ArtifactKind = ArtifactKind::PoseSet;
+}
+
+impl PoseSetV1 {
+    pub fn from_pose_set(set: &PoseSet) -> Self {
+        PoseSetV1 {
+            names: set.names.clone(),
+            template: set.template as u32,
+            faces: set.faces.clone(),
+            positions: set.poses.iter().map(|p| p.iter().map(vec3_to_f32).collect()).collect(),
+        }
+    }
+
+    pub fn to_pose_set(&self) -> Result<PoseSet, MeshError> {
+        let poses = self.positions.iter().map(|p| p.iter().map(|&q| vec3_from_f32(q)).collect()).collect();
+        PoseSet::try_new(self.names.clone(), poses, self.faces.clone(), self.template as usize)
+    }
+}
+
+/// Part labels validated against a pose set.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct LabelsV1 {
+    pub names: Vec<String>,
+    pub labels: Vec<u32>,
+}
+
+impl ArtifactBody for LabelsV1 {
+    const KIND: ArtifactKind = ArtifactKind::Labels;
+}
+
+impl LabelsV1 {
+    pub fn from_labels(labels: &PartLabels) -> Self {
+        LabelsV1 { names: labels.names.clone(), labels: labels.labels.clone() }
+    }
+
+    pub fn to_labels(&self) -> Result<PartLabels, MeshError> {
+        PartLabels::try_new(self.labels.clone(), self.names.clone())
+    }
+}

@@ -1,0 +1,62 @@
+//! Atomic file writes: bytes go to a temp file in the destination's directory, are
+//! flushed to disk, then renamed over the destination. A reader (or a later run) sees
+//! the old file or the complete new one, never a torn write.
+
+use std::fs::{self, File};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::error::IoError;
+
+/// Writes a file atomically with `fill`, which receives a buffered writer. Creates the
+/// parent directory. On any error the temp file is removed and the destination is
+/// untouched.
+pub fn write_atomic_with(
+    path: &Path,
+    fill: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+) -> Result<(), IoError> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    fs::create_dir_all(dir).map_err(|e| IoError::io(dir, e))?;
+    let tmp = temp_path(path);
+    let result = (|| {
+        let file = File::create(&tmp)?;
+        let mut w = BufWriter::with_capacity(1 << 20, file);
+        fill(&mut w)?;
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        fs::rename(&tmp, path)
+    })();
+    result.map_err(|e| {
+        let _ = fs::remove_file(&tmp);
+        IoError::io(path, e)
+    })
+}
+
+/// Writes `bytes` to `path` atomically.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
+    write_atomic_with(path, |w| w.write_all(bytes))
+}
+
+/// Writes `value` as pretty JSON (with a trailing newline) to `path`, atomically.
+pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), IoError> {
+    let mut text = serde_json::to_string_pretty(value)
+        .map_err(|e| IoError::Json { path: path.to_owned(), reason: e.to_string() })?;
+    text.push('\n');
+    write_atomic(path, text.as_bytes())
+}
+
+/// Reads JSON from `path` into `T`.
+pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, IoError> {
+    let bytes = fs::read(path).map_err(|e| IoError::io(path, e))?;
+    serde_json::from_slice(&bytes).map_err(|e| IoError::Json { path: path.to_owned(), reason: e.to_string() })
+}
+
+/// A temp name beside `path`, unique per process and call, starting with '.' so that
+/// globs over a folder do not pick it up. Left-overs of a killed run end in `.tmp`.
+fn temp_path(path: &Path) -> PathBuf {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
+    path.with_file_name(format!(".{name}.{}.{n}.tmp", std::process::id()))
+}

@@ -1,0 +1,83 @@
+//! `IoError`: every failure to read or write a file, naming the file and, where it
+//! applies, the element (line, vertex, face) at fault.
+
+use std::path::PathBuf;
+
+use desal_mesh::MeshError;
+use thiserror::Error;
+
+#[derive(Debug, Error)]
+pub enum IoError {
+    /// The OS refused to open, read or write the file.
+    #[error("{path}: {source}")]
+    Io { path: PathBuf, source: std::io::Error },
+
+    /// The extension is not one desal reads.
+    #[error("{path}: unsupported mesh format '.{extension}' (desal reads .ply and .obj)")]
+    UnsupportedFormat { path: PathBuf, extension: String },
+
+    /// The file is not a well-formed mesh file (bad header, truncated payload, missing
+    /// properties).
+    #[error("{path}: not a readable mesh: {reason}")]
+    BadMesh { path: PathBuf, reason: String },
+
+    /// The file parsed but its content is invalid (face index out of range, NaN, ...).
+    #[error("{path}: {source}")]
+    InvalidMesh { path: PathBuf, source: MeshError },
+
+    /// A line of a text file (OBJ, labels) could not be parsed.
+    #[error("{path}:{line}: {reason}")]
+    BadLine { path: PathBuf, line: usize, reason: String },
+
+    /// The file does not start with the desal artifact magic.
+    #[error("{path}: not a desal artifact (wrong magic bytes); expected a file written by a desal stage")]
+    NotAnArtifact { path: PathBuf },
+
+    /// The artifact is of another kind than the reader expects.
+    #[error("{path}: is a '{found}' artifact, but a '{expected}' artifact is needed here")]
+    WrongKind { path: PathBuf, expected: &'static str, found: String },
+
+    /// Written by a newer desal with a format this build cannot read.
+    #[error(
+        "{path}: '{kind}' artifact format version {found} was written by a newer desal (this build reads up to version {supported}); upgrade desal or re-run the stage with this version"
+    )]
+    NewerVersion { path: PathBuf, kind: &'static str, found: u16, supported: u16 },
+
+    /// Written by an older desal whose format this build no longer reads.
+    #[error(
+        "{path}: '{kind}' artifact format version {found} is older than this build supports (version {supported}); re-run the stage that produced it to regenerate it"
+    )]
+    OlderVersion { path: PathBuf, kind: &'static str, found: u16, supported: u16 },
+
+    /// The reserved header bytes are not zero: corrupt, or an unknown extension.
+    #[error("{path}: corrupt artifact header (reserved bytes are not zero)")]
+    BadHeader { path: PathBuf },
+
+    /// The file is shorter than its header says.
+    #[error(
+        "{path}: truncated artifact: the header announces {expected} payload bytes, the file holds {found}; the write was interrupted or the copy is incomplete — re-run the stage"
+    )]
+    Truncated { path: PathBuf, expected: u64, found: u64 },
+
+    /// The payload does not match its checksum.
+    #[error("{path}: artifact checksum mismatch: the file is corrupt; delete it and re-run the stage")]
+    Checksum { path: PathBuf },
+
+    /// The payload passed its checksum but does not decode (a bug, or a forged header).
+    #[error("{path}: artifact payload does not decode: {reason}")]
+    Decode { path: PathBuf, reason: String },
+
+    /// JSON could not be read or written.
+    #[error("{path}: {reason}")]
+    Json { path: PathBuf, reason: String },
+}
+
+impl IoError {
+    pub(crate) fn io(path: &std::path::Path, source: std::io::Error) -> Self {
+        IoError::Io { path: path.to_owned(), source }
+    }
+
+    pub(crate) fn bad_mesh(path: &std::path::Path, reason: impl Into<String>) -> Self {
+        IoError::BadMesh { path: path.to_owned(), reason: reason.into() }
+    }
+}
