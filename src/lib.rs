@@ -1,2 +1,23 @@
-//! The desal driver library: stage adapters, pipeline files, the artifact cache, batch
-//! runs. The binaries in `src/bin` are thin wrappers over it.
+//! The desal driver library: pipeline files, ingest, stage adapters, the artifact cache,
+//! batch runs and `inspect`. The binaries in `src/main.rs` and `src/bin/` are thin
+//! wrappers over it.
+//!
+//! **Invariant:** this package is the only place that knows paths, the cache, the CLI and
+//! progress bars; the stage crates see data and config structs only.
+
+pub mod cache;
+pub mod ingest;
+pub mod inspect;
+pub mod pipeline;
+pub mod progress;
+pub mod run;
+pub mod stages;
+
+/// Prints an error chain the way every desal binary does, and returns the exit code.
+pub fn report_error(error: &anyhow::Error) -> std::process::ExitCode {
+    eprintln!("error: {error}");
+    for cause in error.chain().skip(1) {
+        eprintln!("  caused by: {cause}");
+    }
+    std::process::ExitCode::from(1)
+}

@@ -1,2 +1,93 @@
-//! `desal`: the driver binary.
-fn main() {}
+//! `desal`: the driver. `run` chains every stage over a pipeline file with the cache;
+//! `inspect` describes an artifact. Thin: arguments → options → one library call.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use desal::progress::ProgressMode;
+use desal::run::{RunOptions, Shard, Stage};
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "desal",
+    version,
+    about = "Deformation-saliency simplification of registered body pose sets"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run the whole pipeline for every dataset of a pipeline file.
+    Run {
+        /// The pipeline file (TOML; see pipelines/README.md).
+        pipeline: PathBuf,
+        /// Output root (each dataset writes to OUT/<name>); overrides the file's `out`.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Cache folder (default: <output root>/.cache). Share it between shards.
+        #[arg(long)]
+        cache_dir: Option<PathBuf>,
+        /// Recompute every stage.
+        #[arg(long)]
+        force: bool,
+        /// Recompute this stage and the ones after it.
+        #[arg(long, value_enum)]
+        from: Option<Stage>,
+        /// Datasets run in parallel.
+        #[arg(long, default_value_t = 1)]
+        jobs: usize,
+        /// Run the I-th of N deterministic parts of the batch (1-based), e.g. 2/8.
+        #[arg(long)]
+        shard: Option<Shard>,
+        /// No progress output.
+        #[arg(long)]
+        quiet: bool,
+        /// Say why each stage missed the cache.
+        #[arg(long)]
+        explain: bool,
+    },
+    /// Describe artifacts: kind, version, producer, inputs, summary figures.
+    Inspect {
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+    },
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => desal::report_error(&e),
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Run { pipeline, out, cache_dir, force, from, jobs, shard, quiet, explain } => {
+            let options = RunOptions {
+                out: out.clone(),
+                cache_dir,
+                force,
+                from,
+                jobs,
+                shard,
+                progress: if quiet { ProgressMode::Quiet } else { ProgressMode::Auto },
+                explain,
+            };
+            let pipeline = desal::pipeline::load(&pipeline, out.as_deref())?;
+            let reports = desal::run::run(&pipeline, &options)?;
+            print!("{}", desal::run::summary_table(&reports));
+            Ok(())
+        }
+        Command::Inspect { files } => {
+            for file in files {
+                print!("{}", desal::inspect::describe(&file)?);
+            }
+            Ok(())
+        }
+    }
+}

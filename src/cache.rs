@@ -1,0 +1,294 @@
+//! The content-addressed artifact cache.
+//!
+//! A stage run is identified by a key, the BLAKE3 hash of the canonical JSON of:
+//!
+//! | field            | what                                                            |
+//! |------------------|-----------------------------------------------------------------|
+//! | `stage`          | stage id (`ingest`, `labels`, `fit`, `saliency`, `simplify`, `map`) |
+//! | `stage_version`  | version of the stage's algorithm (bumped when output changes)   |
+//! | `format_version` | format version of the artifact kind it writes                   |
+//! | `parameters`     | the stage's parameters, canonical JSON (sorted keys)            |
+//! | `inputs`         | `(role, content hash)` of every input: file bytes for source files, payload hashes for artifacts |
+//!
+//! What never goes in: paths, file names, modification times, the dataset's name, the
+//! output folder, thread counts. Two datasets with the same content share entries.
+//!
+//! Layout: `<cache>/<stage>/<key>/artifact.dsa` plus `summary.json` (what a person wants
+//! to read). An entry is built in a temp folder beside it (`.tmp-<key>-<pid>-<n>`) and
+//! renamed into place, so a killed run leaves no entry behind, only a temp folder that no
+//! lookup ever reads. An entry whose artifact fails its checksum is reported, deleted
+//! and recomputed, never used.
+//!
+//! Why an entry missed: after each stage run, its key's components are recorded under
+//! `<cache>/explain/<dataset>/<stage>.json`; a miss compares the new components with that
+//! record and names what changed (cargo's fingerprint side files are the model).
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use anyhow::{Context, Result};
+use desal_io::artifact::{self, ArtifactBody, ContentHash, InputRef, Producer};
+use serde::{Deserialize, Serialize};
+
+/// The components of a stage run's cache key.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StageKey {
+    pub stage: String,
+    pub stage_version: u32,
+    pub format_version: u16,
+    /// Canonical JSON of the parameters.
+    pub parameters: String,
+    /// `(role, hash)` of every input, in a fixed order per stage.
+    pub inputs: Vec<(String, ContentHash)>,
+}
+
+impl StageKey {
+    /// The key: BLAKE3 of the canonical JSON of the components.
+    pub fn hash(&self) -> ContentHash {
+        ContentHash::of(crate::pipeline::canonical_json(self).as_bytes())
+    }
+
+    /// The producer record an artifact made under this key carries. `hints` gives a
+    /// human-readable name per input role (never part of the key).
+    pub fn producer(&self, hints: &[(String, String)]) -> Producer {
+        let hint =
+            |role: &str| hints.iter().find(|(r, _)| r == role).map(|(_, h)| h.clone()).unwrap_or_default();
+        Producer {
+            stage: self.stage.clone(),
+            stage_version: self.stage_version,
+            tool_version: env!("CARGO_PKG_VERSION").to_owned(),
+            parameters: self.parameters.clone(),
+            inputs: self
+                .inputs
+                .iter()
+                .map(|(role, hash)| InputRef { role: role.clone(), hash: *hash, hint: hint(role) })
+                .collect(),
+        }
+    }
+
+    /// What differs from `old`, in words; empty when nothing does.
+    pub fn differences(&self, old: &StageKey) -> Vec<String> {
+        let mut out = Vec::new();
+        if self.stage_version != old.stage_version {
+            out.push(format!("stage version {} -> {}", old.stage_version, self.stage_version));
+        }
+        if self.format_version != old.format_version {
+            out.push(format!("format version {} -> {}", old.format_version, self.format_version));
+        }
+        if self.parameters != old.parameters {
+            out.push(parameter_differences(&old.parameters, &self.parameters));
+        }
+        let old_roles: Vec<&String> = old.inputs.iter().map(|(r, _)| r).collect();
+        let new_roles: Vec<&String> = self.inputs.iter().map(|(r, _)| r).collect();
+        if old_roles != new_roles {
+            out.push(format!(
+                "the input list changed ({} -> {} inputs)",
+                old.inputs.len(),
+                self.inputs.len()
+            ));
+        } else {
+            let changed: Vec<&str> = self
+                .inputs
+                .iter()
+                .zip(&old.inputs)
+                .filter(|(a, b)| a.1 != b.1)
+                .map(|(a, _)| a.0.as_str())
+                .collect();
+            if !changed.is_empty() {
+                let shown: Vec<&str> = changed.iter().take(5).copied().collect();
+                let more = if changed.len() > 5 {
+                    format!(" and {} more", changed.len() - 5)
+                } else {
+                    String::new()
+                };
+                out.push(format!("input content changed: {}{more}", shown.join(", ")));
+            }
+        }
+        out
+    }
+}
+
+fn parameter_differences(old: &str, new: &str) -> String {
+    let (Ok(serde_json::Value::Object(a)), Ok(serde_json::Value::Object(b))) =
+        (serde_json::from_str::<serde_json::Value>(old), serde_json::from_str::<serde_json::Value>(new))
+    else {
+        return format!("parameters {old} -> {new}");
+    };
+    let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+    keys.sort();
+    keys.dedup();
+    let changes: Vec<String> = keys
+        .into_iter()
+        .filter(|k| a.get(*k) != b.get(*k))
+        .map(|k| {
+            let show = |v: Option<&serde_json::Value>| v.map_or("(unset)".to_owned(), |v| v.to_string());
+            format!("{k} {} -> {}", show(a.get(k)), show(b.get(k)))
+        })
+        .collect();
+    format!("parameter {}", changes.join(", "))
+}
+
+/// A cache rooted at a folder.
+#[derive(Debug, Clone)]
+pub struct Cache {
+    root: PathBuf,
+}
+
+/// A cache entry found and verified.
+#[derive(Debug)]
+pub struct Hit<T> {
+    pub body: T,
+    pub producer: Producer,
+    pub hash: ContentHash,
+    pub summary: serde_json::Value,
+}
+
+impl Cache {
+    pub fn new(root: impl Into<PathBuf>) -> Self {
+        Cache { root: root.into() }
+    }
+
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
+    /// The folder of the entry for `key`.
+    pub fn entry_dir(&self, key: &StageKey) -> PathBuf {
+        self.root.join(&key.stage).join(key.hash().to_hex())
+    }
+
+    /// Looks up `key`. A corrupt entry is reported on stderr, removed, and treated as a
+    /// miss.
+    pub fn lookup<T: ArtifactBody>(&self, key: &StageKey) -> Option<Hit<T>> {
+        let dir = self.entry_dir(key);
+        let path = dir.join("artifact.dsa");
+        if !path.exists() {
+            return None;
+        }
+        match artifact::read_artifact::<T>(&path) {
+            Ok((producer, body, hash)) => {
+                let summary = fs::read(dir.join("summary.json"))
+                    .ok()
+                    .and_then(|b| serde_json::from_slice(&b).ok())
+                    .unwrap_or(serde_json::Value::Null);
+                Some(Hit { body, producer, hash, summary })
+            }
+            Err(e) => {
+                eprintln!("warning: cache entry rejected, recomputing: {e}");
+                let _ = fs::remove_dir_all(&dir);
+                None
+            }
+        }
+    }
+
+    /// Stores an artifact and its summary under `key`, atomically (temp folder, rename).
+    /// Returns the artifact's content hash.
+    pub fn store<T: ArtifactBody>(
+        &self,
+        key: &StageKey,
+        producer: &Producer,
+        body: &T,
+        summary: &serde_json::Value,
+    ) -> Result<ContentHash> {
+        static COUNTER: AtomicU64 = AtomicU64::new(0);
+        let dir = self.entry_dir(key);
+        let parent = dir.parent().expect("entry has a parent");
+        fs::create_dir_all(parent)
+            .with_context(|| format!("cannot create cache folder {}", parent.display()))?;
+        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+        let tmp = parent.join(format!(".tmp-{}-{}-{n}", key.hash().short(), std::process::id()));
+        let _ = fs::remove_dir_all(&tmp);
+        fs::create_dir_all(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
+        let hash = artifact::write_artifact(&tmp.join("artifact.dsa"), producer, body)?;
+        desal_io::write_json(&tmp.join("summary.json"), summary)?;
+        desal_io::write_json(&tmp.join("key.json"), key)?;
+        if dir.exists() {
+            // A concurrent run (another shard) stored the same key first; both are equal.
+            let _ = fs::remove_dir_all(&tmp);
+        } else if let Err(e) = fs::rename(&tmp, &dir) {
+            let _ = fs::remove_dir_all(&tmp);
+            if !dir.exists() {
+                return Err(e).with_context(|| format!("cannot move cache entry into {}", dir.display()));
+            }
+        }
+        Ok(hash)
+    }
+
+    fn explain_path(&self, dataset: &str, stage: &str) -> PathBuf {
+        self.root.join("explain").join(sanitize(dataset)).join(format!("{stage}.json"))
+    }
+
+    /// Why `key` missed for `dataset`, compared with the last run recorded for it.
+    pub fn explain_miss(&self, dataset: &str, key: &StageKey) -> String {
+        let path = self.explain_path(dataset, &key.stage);
+        let Ok(old) = desal_io::atomic::read_json::<StageKey>(&path) else {
+            return "no earlier run of this stage recorded for this dataset".into();
+        };
+        let diffs = key.differences(&old);
+        if diffs.is_empty() {
+            "same key as the last run, but its entry is gone (deleted, corrupt, or --force)".into()
+        } else {
+            diffs.join("; ")
+        }
+    }
+
+    /// Records `key` as the last run of its stage for `dataset`.
+    pub fn record(&self, dataset: &str, key: &StageKey) -> Result<()> {
+        Ok(desal_io::write_json(&self.explain_path(dataset, &key.stage), key)?)
+    }
+}
+
+fn sanitize(name: &str) -> String {
+    name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn key() -> StageKey {
+        StageKey {
+            stage: "simplify".into(),
+            stage_version: 1,
+            format_version: 1,
+            parameters: r#"{"placement":"optimal","target_vertices":2500}"#.into(),
+            inputs: vec![("poses".into(), ContentHash([1; 32])), ("saliency".into(), ContentHash([2; 32]))],
+        }
+    }
+
+    /// Every component of the key changes the key (one test per key input).
+    #[test]
+    fn every_component_changes_the_key() {
+        let base = key().hash();
+        let mut k = key();
+        k.stage = "map".into();
+        assert_ne!(k.hash(), base);
+        let mut k = key();
+        k.stage_version = 2;
+        assert_ne!(k.hash(), base);
+        let mut k = key();
+        k.format_version = 2;
+        assert_ne!(k.hash(), base);
+        let mut k = key();
+        k.parameters = r#"{"placement":"subset","target_vertices":2500}"#.into();
+        assert_ne!(k.hash(), base);
+        let mut k = key();
+        k.inputs[1].1 = ContentHash([3; 32]);
+        assert_ne!(k.hash(), base);
+        let mut k = key();
+        k.inputs[0].0 = "other".into();
+        assert_ne!(k.hash(), base);
+        assert_eq!(key().hash(), base, "the key is a pure function of its components");
+    }
+
+    #[test]
+    fn differences_name_the_changed_parameter_and_input() {
+        let mut k = key();
+        k.parameters = r#"{"placement":"optimal","target_vertices":3000}"#.into();
+        k.inputs[1].1 = ContentHash([9; 32]);
+        let d = k.differences(&key()).join("; ");
+        assert!(d.contains("target_vertices 2500 -> 3000"), "{d}");
+        assert!(d.contains("input content changed: saliency"), "{d}");
+    }
+}

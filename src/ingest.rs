@@ -1,0 +1,161 @@
+//! Ingest: pose files and a labels file in, a validated `PoseSet` and `PartLabels` out.
+//! Every check that can fail on user input happens here, before anything is written.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use desal_io::ContentHash;
+use desal_mesh::validate::{check_same_faces, clean_faces};
+use desal_mesh::{PartLabels, PoseSet, Progress, TriMesh};
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::pipeline::TemplateSpec;
+
+/// Summary of an ingest, for the JSON sidecar and the run's log.
+#[derive(Debug, Clone, Serialize)]
+pub struct IngestSummary {
+    pub poses: usize,
+    pub vertices: usize,
+    pub faces: usize,
+    pub template: String,
+    /// Template faces removed because they repeat a vertex (original face indices).
+    pub removed_degenerate_faces: Vec<usize>,
+    /// Template faces removed because they repeat an earlier face (original indices).
+    pub removed_duplicate_faces: Vec<usize>,
+    pub bbox_min: [f64; 3],
+    pub bbox_max: [f64; 3],
+    pub diagonal: f64,
+}
+
+/// BLAKE3 of each file's bytes, in parallel.
+pub fn hash_files(files: &[PathBuf]) -> Result<Vec<ContentHash>> {
+    files
+        .par_iter()
+        .map(|f| {
+            let bytes = std::fs::read(f).with_context(|| format!("cannot read {}", f.display()))?;
+            Ok(ContentHash::of(&bytes))
+        })
+        .collect()
+}
+
+/// The pose name of a file: its stem.
+pub fn pose_name(path: &Path) -> String {
+    path.file_stem().map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into_owned())
+}
+
+/// Index of the template among `files`.
+pub fn resolve_template(files: &[PathBuf], spec: Option<&TemplateSpec>) -> Result<usize> {
+    match spec {
+        None => Ok(0),
+        Some(TemplateSpec::Index(i)) if *i < files.len() => Ok(*i),
+        Some(TemplateSpec::Index(i)) => {
+            bail!("template index {i} is out of range: there are {} poses", files.len())
+        }
+        Some(TemplateSpec::Name(name)) => files
+            .iter()
+            .position(|f| {
+                pose_name(f) == *name
+                    || f.file_name().is_some_and(|n| n.to_string_lossy() == *name)
+                    || f.ends_with(name)
+            })
+            .with_context(|| format!("template '{name}' is not one of the {} pose files", files.len())),
+    }
+}
+
+/// Reads every pose (in parallel), checks registration, cleans the template's faces
+/// (with a warning per removal kind) and builds the pose set.
+pub fn ingest_poses(
+    files: &[PathBuf],
+    template: usize,
+    ignore_pose_faces: bool,
+    progress: &dyn Progress,
+) -> Result<(PoseSet, IngestSummary)> {
+    if files.is_empty() {
+        bail!("the pose list is empty: give at least one pose file");
+    }
+    progress.begin("read poses", files.len() as u64);
+    let meshes: Vec<TriMesh> = files
+        .par_iter()
+        .map(|f| {
+            let mesh = desal_io::read_mesh(f)?;
+            progress.advance(1);
+            Ok(mesh)
+        })
+        .collect::<Result<_, desal_io::IoError>>()?;
+    progress.finish();
+
+    let template_mesh = &meshes[template];
+    let template_file = &files[template];
+    for (file, mesh) in files.iter().zip(&meshes) {
+        if mesh.vertex_count() != template_mesh.vertex_count() {
+            bail!(
+                "{}: has {} vertices but the template {} has {}; all poses must be registered (same vertex count and order)",
+                file.display(),
+                mesh.vertex_count(),
+                template_file.display(),
+                template_mesh.vertex_count()
+            );
+        }
+        if !ignore_pose_faces {
+            check_same_faces(&template_mesh.faces, &mesh.faces, &pose_name(file)).with_context(|| {
+                format!(
+                    "{}: triangle list differs from the template {}",
+                    file.display(),
+                    template_file.display()
+                )
+            })?;
+        }
+    }
+    let (faces, cleanup) = clean_faces(&template_mesh.faces);
+    if !cleanup.degenerate.is_empty() {
+        eprintln!(
+            "warning: {}: removed {} degenerate face(s) (a repeated vertex), e.g. face {}",
+            template_file.display(),
+            cleanup.degenerate.len(),
+            cleanup.degenerate[0]
+        );
+    }
+    if !cleanup.duplicate.is_empty() {
+        eprintln!(
+            "warning: {}: removed {} duplicate face(s) (same vertices as an earlier face), e.g. face {}",
+            template_file.display(),
+            cleanup.duplicate.len(),
+            cleanup.duplicate[0]
+        );
+    }
+    let names: Vec<String> = files.iter().map(|f| pose_name(f)).collect();
+    if let Some((i, name)) = names.iter().enumerate().find(|(i, n)| names[..*i].contains(n)) {
+        bail!(
+            "{}: pose name '{name}' is used twice (pose {i}); pose files need distinct stems",
+            files[i].display()
+        );
+    }
+    let poses = meshes.into_iter().map(|m| m.positions).collect();
+    let set = PoseSet::try_new(names, poses, faces, template).context("invalid pose set")?;
+    let tm = set.template_mesh();
+    let (lo, hi) = tm.bounding_box().expect("non-empty");
+    let summary = IngestSummary {
+        poses: set.pose_count(),
+        vertices: set.vertex_count(),
+        faces: set.face_count(),
+        template: set.names[template].clone(),
+        removed_degenerate_faces: cleanup.degenerate,
+        removed_duplicate_faces: cleanup.duplicate,
+        bbox_min: lo.into(),
+        bbox_max: hi.into(),
+        diagonal: (hi - lo).norm(),
+    };
+    Ok((set, summary))
+}
+
+/// Reads part labels and checks them against the pose set: one per vertex, every part
+/// able to carry a rigid fit.
+pub fn ingest_labels(path: &Path, set: &PoseSet) -> Result<PartLabels> {
+    let labels = desal_io::labels::read_labels(path)?;
+    labels.check_vertex_count(set.vertex_count()).with_context(|| format!("{}", path.display()))?;
+    labels.check_parts_fittable(set.template_positions()).with_context(|| {
+        format!("{}: part labels against the template '{}'", path.display(), set.names[set.template])
+    })?;
+    Ok(labels)
+}

@@ -1,0 +1,303 @@
+//! Pipeline files (TOML, `schema = 1`): which datasets to run and with which stage
+//! parameters. The format is documented in `pipelines/README.md`.
+//!
+//! Relative paths are resolved against the pipeline file's own folder, so a pipeline and
+//! its data can be moved together. Parameters given under `[defaults]` apply to every
+//! dataset; a dataset's own tables override them key by key.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use serde::{Deserialize, Serialize};
+
+/// The pipeline file schema this build reads.
+pub const SCHEMA: u32 = 1;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PipelineToml {
+    schema: u32,
+    /// Output root; each dataset writes to `<out>/<dataset name>`.
+    out: Option<String>,
+    #[serde(default)]
+    defaults: toml::Table,
+    #[serde(rename = "dataset", default)]
+    datasets: Vec<toml::Table>,
+}
+
+/// One dataset's inputs and stage parameters, with every path absolute.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DatasetToml {
+    /// Unique name; also the output sub-folder.
+    pub name: String,
+    /// A glob (`"scans/*.ply"`) or an explicit list of pose files.
+    pub poses: PosesSpec,
+    /// The template: a pose file name or stem, or a 0-based index into the sorted list.
+    #[serde(default)]
+    pub template: Option<TemplateSpec>,
+    /// Part labels file (text or JSON).
+    pub labels: String,
+    /// Use the template's triangles for every pose instead of requiring identical lists.
+    #[serde(default)]
+    pub ignore_pose_faces: bool,
+    /// Up axis for pictures ("x", "y", "z"); detected from the bounding box when absent.
+    #[serde(default)]
+    pub up_axis: Option<String>,
+    #[serde(default)]
+    pub fit: FitParams,
+    #[serde(default)]
+    pub saliency: SaliencyParams,
+    #[serde(default)]
+    pub simplify: SimplifyParams,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum PosesSpec {
+    Glob(String),
+    List(Vec<String>),
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum TemplateSpec {
+    Index(usize),
+    Name(String),
+}
+
+/// Stage 1 parameters.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct FitParams {
+    /// `rigid` (Kabsch, proper rotations; the default) or `affine` (the paper's literal
+    /// unconstrained fit, for the ablation).
+    pub method: String,
+}
+
+impl Default for FitParams {
+    fn default() -> Self {
+        FitParams { method: "rigid".into() }
+    }
+}
+
+/// Stage 2 parameters.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SaliencyParams {
+    /// Sum squared residual distances instead of plain ones.
+    pub squared: bool,
+    /// Normalise by this percentile of the per-vertex sums (100 = the maximum).
+    pub percentile: f64,
+    /// Pose names left out of the sum.
+    pub exclude: Vec<String>,
+    /// Weight floor: stage 3 uses `floor + (1 - floor) * saliency`.
+    pub floor: Option<f64>,
+}
+
+impl Default for SaliencyParams {
+    fn default() -> Self {
+        SaliencyParams { squared: false, percentile: 100.0, exclude: Vec::new(), floor: None }
+    }
+}
+
+/// Stage 3 parameters.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimplifyParams {
+    /// Target vertex count (the paper: 2500). One of the three targets is used, in the
+    /// order vertices, faces, ratio.
+    pub target_vertices: Option<usize>,
+    pub target_faces: Option<usize>,
+    /// Target as a fraction of the input face count.
+    pub ratio: Option<f64>,
+    /// `optimal` (the paper) or `subset` (keep original vertices).
+    pub placement: String,
+    /// Weight the cost by deformation saliency.
+    pub saliency: bool,
+    /// Multiply the cost by the edge length (the paper's balance term).
+    pub balance: bool,
+    /// Keep part borders (lock vertices on the border between two parts).
+    pub keep_part_borders: bool,
+}
+
+impl Default for SimplifyParams {
+    fn default() -> Self {
+        SimplifyParams {
+            target_vertices: None,
+            target_faces: None,
+            ratio: Some(0.2),
+            placement: "optimal".into(),
+            saliency: true,
+            balance: true,
+            keep_part_borders: false,
+        }
+    }
+}
+
+/// A dataset ready to run: the parsed table plus resolved absolute paths.
+#[derive(Debug, Clone)]
+pub struct Dataset {
+    pub spec: DatasetToml,
+    /// Pose files, sorted (glob) or in the listed order.
+    pub pose_files: Vec<PathBuf>,
+    pub labels_file: PathBuf,
+    /// Where this dataset's outputs go.
+    pub out_dir: PathBuf,
+}
+
+/// A parsed pipeline file.
+#[derive(Debug, Clone)]
+pub struct Pipeline {
+    pub path: PathBuf,
+    pub out_root: PathBuf,
+    pub datasets: Vec<Dataset>,
+}
+
+/// Reads and resolves a pipeline file. `out_override` replaces the file's `out`.
+pub fn load(path: &Path, out_override: Option<&Path>) -> Result<Pipeline> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("cannot read pipeline file {}", path.display()))?;
+    parse(path, &text, out_override)
+}
+
+/// Parses pipeline text as if read from `path`.
+pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pipeline> {
+    let ctx = || format!("pipeline file {}", path.display());
+    let raw: toml::Table = toml::from_str(text).with_context(ctx)?;
+    match raw.get("schema").and_then(|v| v.as_integer()) {
+        Some(s) if s == SCHEMA as i64 => {}
+        Some(s) if s > SCHEMA as i64 => {
+            bail!("{}: schema {s} is newer than this desal reads ({SCHEMA}); upgrade desal", path.display())
+        }
+        Some(s) => bail!("{}: unsupported schema {s} (this desal reads schema {SCHEMA})", path.display()),
+        None => bail!("{}: missing `schema = {SCHEMA}` at the top", path.display()),
+    }
+    let file: PipelineToml = toml::from_str(text).with_context(ctx)?;
+    debug_assert_eq!(file.schema, SCHEMA);
+    let base = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf();
+    let base = std::path::absolute(&base).with_context(|| format!("cannot resolve {}", base.display()))?;
+    let out_root = match out_override {
+        Some(o) => std::path::absolute(o)?,
+        None => base.join(file.out.as_deref().unwrap_or("out")),
+    };
+    if file.datasets.is_empty() {
+        bail!("{}: no [[dataset]] tables: nothing to run", path.display());
+    }
+    let mut datasets = Vec::new();
+    for (k, table) in file.datasets.iter().enumerate() {
+        let merged = merge(&file.defaults, table);
+        let spec: DatasetToml = merged
+            .try_into()
+            .with_context(|| format!("{}: dataset #{} ({})", path.display(), k + 1, dataset_name(table)))?;
+        if datasets.iter().any(|d: &Dataset| d.spec.name == spec.name) {
+            bail!("{}: two datasets are named '{}'; names must be unique", path.display(), spec.name);
+        }
+        let pose_files = resolve_poses(&base, &spec.poses)
+            .with_context(|| format!("{}: dataset '{}'", path.display(), spec.name))?;
+        let labels_file = base.join(&spec.labels);
+        let out_dir = out_root.join(&spec.name);
+        datasets.push(Dataset { spec, pose_files, labels_file, out_dir });
+    }
+    Ok(Pipeline { path: path.to_owned(), out_root, datasets })
+}
+
+fn dataset_name(table: &toml::Table) -> String {
+    table.get("name").and_then(|v| v.as_str()).unwrap_or("unnamed").to_owned()
+}
+
+/// `defaults` overlaid by `table`, merging nested tables key by key.
+fn merge(defaults: &toml::Table, table: &toml::Table) -> toml::Table {
+    let mut out = defaults.clone();
+    for (key, value) in table {
+        match (out.get_mut(key), value) {
+            (Some(toml::Value::Table(base)), toml::Value::Table(over)) => {
+                *base = merge(base, over);
+            }
+            _ => {
+                out.insert(key.clone(), value.clone());
+            }
+        }
+    }
+    out
+}
+
+fn resolve_poses(base: &Path, spec: &PosesSpec) -> Result<Vec<PathBuf>> {
+    let files = match spec {
+        PosesSpec::List(list) => list.iter().map(|p| base.join(p)).collect::<Vec<_>>(),
+        PosesSpec::Glob(pattern) => {
+            let full = base.join(pattern);
+            let full = full.to_string_lossy();
+            let mut files: Vec<PathBuf> = glob::glob(&full)
+                .with_context(|| format!("bad glob pattern '{pattern}'"))?
+                .collect::<Result<_, _>>()
+                .with_context(|| format!("cannot list '{pattern}'"))?;
+            files.sort();
+            if files.is_empty() {
+                bail!(
+                    "the pose pattern '{full}' matches no files: check the path (relative paths start at the pipeline file's folder)"
+                );
+            }
+            files
+        }
+    };
+    if files.is_empty() {
+        bail!("the pose list is empty: give at least one pose file");
+    }
+    Ok(files)
+}
+
+/// Canonical JSON of a parameter struct: sorted keys, no whitespace. This is the form
+/// that enters cache keys and artifact producers.
+pub fn canonical_json<T: Serialize>(value: &T) -> String {
+    // serde_json's Map is a BTreeMap (no `preserve_order` feature), so keys come out sorted.
+    let v = serde_json::to_value(value).expect("parameters serialise");
+    serde_json::to_string(&v).expect("a JSON value serialises")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_merge_key_by_key_and_paths_resolve_against_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("a.ply"), b"").unwrap();
+        let text = r#"
+schema = 1
+out = "results"
+[defaults.simplify]
+target_vertices = 100
+placement = "subset"
+[[dataset]]
+name = "one"
+poses = ["a.ply"]
+labels = "labels.txt"
+[dataset.simplify]
+target_vertices = 50
+"#;
+        let p = parse(&dir.path().join("p.toml"), text, None).unwrap();
+        let d = &p.datasets[0];
+        assert_eq!(d.spec.simplify.target_vertices, Some(50));
+        assert_eq!(d.spec.simplify.placement, "subset");
+        assert!(d.spec.simplify.balance, "unset keys keep their defaults");
+        assert_eq!(d.labels_file, dir.path().join("labels.txt"));
+        assert_eq!(d.out_dir, dir.path().join("results").join("one"));
+    }
+
+    #[test]
+    fn schema_and_unknown_keys_are_checked() {
+        let p = Path::new("x.toml");
+        assert!(parse(p, "schema = 2\n", None).unwrap_err().to_string().contains("newer"));
+        assert!(parse(p, "out = 'a'\n", None).unwrap_err().to_string().contains("missing `schema"));
+        let bad = "schema = 1\n[[dataset]]\nname='a'\nposes=['x.ply']\nlabels='l'\ncolour='red'\n";
+        let err = format!("{:#}", parse(p, bad, None).unwrap_err());
+        assert!(err.contains("colour"), "{err}");
+    }
+
+    #[test]
+    fn canonical_json_sorts_keys() {
+        let json = canonical_json(&SimplifyParams::default());
+        assert!(json.starts_with("{\"balance\":true,\"keep_part_borders\":false"), "{json}");
+    }
+}
