@@ -268,8 +268,11 @@ pub struct DatasetOutputs {
     /// `(file name in the output folder, cache artifact to link or copy)`.
     pub artifacts: Vec<(String, PathBuf)>,
     /// `(relative path, writer)` for derived files (PLY, PNG, text, JSON).
-    pub files: Vec<(String, Box<dyn FnOnce(&Path) -> Result<()> + Send>)>,
+    pub files: Vec<(String, FileWriter)>,
 }
+
+/// Writes one derived output file to the path it is given.
+pub type FileWriter = Box<dyn FnOnce(&Path) -> Result<()> + Send>;
 
 impl std::fmt::Debug for DatasetOutputs {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
