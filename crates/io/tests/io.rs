@@ -12,6 +12,11 @@ fn scape_dir() -> Option<PathBuf> {
     if dir.is_dir() {
         Some(dir)
     } else {
+        assert!(
+            std::env::var_os("DESAL_REQUIRE_SHARED_DATA").is_none(),
+            "{} is missing in CI",
+            dir.display()
+        );
         eprintln!(
             "skipped: {} is absent (SCAPE is only available beside the checkout, e.g. in CI)",
             dir.display()

@@ -1,0 +1,5 @@
+//! End-to-end tests of the real binaries: one test binary, one temp folder per test.
+
+mod artifacts;
+mod ingest;
+mod support;

@@ -1,0 +1,118 @@
+//! Shared helpers: a tiny two-part tube pose set written to a temp folder, and running
+//! the `desal` binary on it.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use desal_io::ply::{PlyWriteOptions, write_ply};
+use desal_mesh::{TriMesh, Vec3};
+
+/// `../shared/datasets/<name>` when present; otherwise prints why the test is skipped
+/// and returns None. With `DESAL_REQUIRE_SHARED_DATA=1` (set by `.ci/run`) absence fails.
+pub fn shared_dataset(name: &str) -> Option<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/datasets").join(name);
+    if dir.is_dir() {
+        return Some(dir);
+    }
+    assert!(
+        std::env::var_os("DESAL_REQUIRE_SHARED_DATA").is_none(),
+        "{} is missing but DESAL_REQUIRE_SHARED_DATA is set",
+        dir.display()
+    );
+    eprintln!(
+        "skipped: {} is absent (it sits beside the checkout only in CI and development)",
+        dir.display()
+    );
+    None
+}
+
+/// A closed tube along +y: `rings` rings of `segments` vertices plus two cap centres.
+pub fn tube(rings: usize, segments: usize) -> TriMesh {
+    let mut positions = Vec::new();
+    for r in 0..rings {
+        for s in 0..segments {
+            let a = s as f64 / segments as f64 * std::f64::consts::TAU;
+            positions.push(Vec3::new(0.1 * a.cos(), r as f64 * 0.05, 0.1 * a.sin()));
+        }
+    }
+    let bottom = positions.len() as u32;
+    positions.push(Vec3::new(0.0, 0.0, 0.0));
+    let top = positions.len() as u32;
+    positions.push(Vec3::new(0.0, (rings - 1) as f64 * 0.05, 0.0));
+    let idx = |r: usize, s: usize| (r * segments + s % segments) as u32;
+    let mut faces = Vec::new();
+    for r in 0..rings - 1 {
+        for s in 0..segments {
+            faces.push([idx(r, s), idx(r + 1, s), idx(r + 1, s + 1)]);
+            faces.push([idx(r, s), idx(r + 1, s + 1), idx(r, s + 1)]);
+        }
+    }
+    for s in 0..segments {
+        faces.push([bottom, idx(0, s), idx(0, s + 1)]);
+        faces.push([top, idx(rings - 1, s + 1), idx(rings - 1, s)]);
+    }
+    TriMesh { positions, faces }
+}
+
+/// Bends the upper half of `mesh` (y above the middle) about the z axis by `angle`.
+pub fn bend(mesh: &TriMesh, angle: f64) -> TriMesh {
+    let ymax = mesh.positions.iter().map(|p| p.y).fold(0.0, f64::max);
+    let pivot = Vec3::new(0.0, ymax / 2.0, 0.0);
+    let (s, c) = angle.sin_cos();
+    let positions = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            if p.y <= pivot.y {
+                return *p;
+            }
+            let d = p - pivot;
+            pivot + Vec3::new(c * d.x - s * d.y, s * d.x + c * d.y, d.z)
+        })
+        .collect();
+    TriMesh { positions, faces: mesh.faces.clone() }
+}
+
+/// Writes a pose set of the tube (rest + bent poses), labels (lower/upper half) and a
+/// pipeline file into `dir`; returns the pipeline path.
+pub fn write_tube_dataset(dir: &Path, extra_toml: &str) -> PathBuf {
+    let rest = tube(12, 10);
+    std::fs::create_dir_all(dir.join("poses")).unwrap();
+    for (k, angle) in [0.0, 0.3, 0.6, -0.4].into_iter().enumerate() {
+        write_ply(&dir.join(format!("poses/p{k}.ply")), &bend(&rest, angle), &PlyWriteOptions::default())
+            .unwrap();
+    }
+    let ymid = 11.0 * 0.05 / 2.0;
+    let labels: Vec<String> =
+        rest.positions.iter().map(|p| if p.y <= ymid { "0" } else { "1" }.to_owned()).collect();
+    std::fs::write(dir.join("labels.txt"), format!("# ids: 0=lower, 1=upper\n{}\n", labels.join("\n")))
+        .unwrap();
+    let pipeline = dir.join("pipeline.toml");
+    std::fs::write(
+        &pipeline,
+        format!(
+            "schema = 1\nout = \"out\"\n\n[[dataset]]\nname = \"tube\"\nposes = \"poses/*.ply\"\nlabels = \"labels.txt\"\n{extra_toml}\n"
+        ),
+    )
+    .unwrap();
+    pipeline
+}
+
+/// Runs `desal` with `args`.
+pub fn desal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_desal")).args(args).output().expect("desal runs")
+}
+
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Runs the pipeline quietly and returns the parsed report.json of dataset `name`.
+pub fn run_ok(pipeline: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["run", pipeline.to_str().unwrap(), "--quiet"];
+    args.extend_from_slice(extra);
+    let out = desal(&args);
+    assert!(out.status.success(), "desal failed: {}", stderr(&out));
+    let report = pipeline.parent().unwrap().join("out/tube/report.json");
+    serde_json::from_slice(&std::fs::read(report).unwrap()).unwrap()
+}
