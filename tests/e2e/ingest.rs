@@ -150,3 +150,19 @@ fn truncated_and_foreign_files_are_refused() {
     std::fs::write(&path, b"\x89PNG not a mesh").unwrap();
     expect_failure(&pipeline, &["p1.ply", "not a readable mesh"]);
 }
+
+#[test]
+fn scape_pipeline_ingests_all_71_poses() {
+    if shared_dataset("scape").is_none() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/scape.toml");
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet", "--out", dir.path().to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("scape/report.json")).unwrap()).unwrap();
+    assert_eq!(report["input"]["poses"], 71);
+    assert_eq!(report["input"]["vertices"], 12500);
+    assert_eq!(report["input"]["faces"], 24998);
+}
