@@ -1,2 +1,32 @@
-//! The paper's experiment (§4): SCAPE pose deformation of a simplified pose set, v2f and
-//! v2v errors, and the method comparison.
+//! The paper's experiment (§4): SCAPE pose deformation of a (simplified or full) pose
+//! set, and the v2f / v2v errors that measure it.
+//!
+//! - [`metrics`]: v2f (Eq. 6) and v2v (Eq. 7), their halves and per-vertex arrays, in
+//!   squared input units (m² for SCAPE), exact distances through a BVH.
+//! - [`fit_model`] / [`Model::synthesize`]: the SCAPE pose-deformation model (Anguelov et
+//!   al. 2005) fitted on a registered pose set with per-pose part rotations (stage 1's
+//!   fit), then driven by part rotations alone; built from [`skeleton`] (parts, joints,
+//!   twists), [`gradient`] (deformation gradients) and [`poisson`] (sparse
+//!   reconstruction).
+//! - [`folds`]: k-fold splits over poses for held-out evaluation.
+//!
+//! **Invariant:** like every stage crate, this one knows no file, path or progress bar:
+//! it takes meshes, labels and rotations, and returns positions and numbers. The method
+//! comparison, tables and figures live in the driver (`desal eval`).
+
+mod bvh;
+pub mod closest_point;
+pub mod error;
+pub mod folds;
+pub mod gradient;
+pub mod metrics;
+pub mod model;
+pub mod poisson;
+pub mod skeleton;
+
+pub use error::EvalError;
+pub use folds::{folds, training_poses};
+pub use metrics::{SurfaceIndex, V2fHalves, VertexErrors, VertexIndex, v2f, v2f_halves, v2v, vertex_errors};
+pub use model::{Model, ModelConfig, ModelReport, fit_model};
+pub use poisson::PoissonSolver;
+pub use skeleton::{Joint, Skeleton};

@@ -1,0 +1,201 @@
+//! A compact bounding-volume hierarchy for exact nearest-primitive queries.
+//!
+//! One structure serves both metrics: over triangles (point-to-surface distance, v2f) and
+//! over points (nearest vertex, v2v). It is built once per mesh by median splits of the
+//! primitive centroids along the longest axis (leaves of at most [`LEAF_SIZE`]
+//! primitives) and queried depth-first, nearer child first, pruning a node whose box is
+//! farther than the best distance found so far. Pruning is strict (`>`), so among
+//! primitives at exactly the same distance the lowest primitive index wins: results do
+//! not depend on build order or thread count.
+
+use desal_mesh::{Real, Vec3};
+
+/// Primitives per leaf: small enough that leaf scans stay cheap, large enough to keep the
+/// tree shallow.
+const LEAF_SIZE: usize = 4;
+
+/// An axis-aligned box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Aabb {
+    pub lo: Vec3,
+    pub hi: Vec3,
+}
+
+impl Aabb {
+    fn empty() -> Self {
+        Self { lo: Vec3::repeat(Real::INFINITY), hi: Vec3::repeat(Real::NEG_INFINITY) }
+    }
+
+    pub(crate) fn of_points(points: &[Vec3]) -> Self {
+        points.iter().fold(Self::empty(), |b, p| b.grown(p))
+    }
+
+    fn grown(self, p: &Vec3) -> Self {
+        Self { lo: self.lo.inf(p), hi: self.hi.sup(p) }
+    }
+
+    fn union(self, other: &Self) -> Self {
+        Self { lo: self.lo.inf(&other.lo), hi: self.hi.sup(&other.hi) }
+    }
+
+    fn centre(&self) -> Vec3 {
+        (self.lo + self.hi) * 0.5
+    }
+
+    /// Squared distance from `p` to the box (0 inside).
+    fn distance_sq(&self, p: &Vec3) -> Real {
+        let below = self.lo - p;
+        let above = p - self.hi;
+        below.sup(&above).sup(&Vec3::zeros()).norm_squared()
+    }
+}
+
+/// A node: `count > 0` is a leaf holding `order[first..first + count]`; `count == 0` is
+/// an inner node whose left child is the next node and whose right child is `first`.
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    bounds: Aabb,
+    first: u32,
+    count: u32,
+}
+
+/// A BVH over primitives given by their bounding boxes, indexed `0..n` in the caller's
+/// primitive space.
+#[derive(Debug, Clone)]
+pub(crate) struct Bvh {
+    nodes: Vec<Node>,
+    /// Primitive indices, permuted so that every leaf is a contiguous range.
+    order: Vec<u32>,
+}
+
+impl Bvh {
+    /// Builds the hierarchy over `boxes[i]`, the bounds of primitive `i`.
+    pub(crate) fn build(boxes: &[Aabb]) -> Self {
+        let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
+        let centres: Vec<Vec3> = boxes.iter().map(Aabb::centre).collect();
+        let mut nodes = Vec::with_capacity(2 * boxes.len().div_ceil(LEAF_SIZE) + 1);
+        if !boxes.is_empty() {
+            build_node(&mut nodes, &mut order, 0, boxes, &centres);
+        }
+        Self { nodes, order }
+    }
+
+    /// The primitive nearest to `p` as `(index, squared distance)`, where
+    /// `distance_sq(i)` is the exact squared distance from `p` to primitive `i`. `None`
+    /// when there are no primitives.
+    pub(crate) fn nearest(&self, p: &Vec3, distance_sq: impl Fn(u32) -> Real) -> Option<(u32, Real)> {
+        let mut best: Option<(u32, Real)> = None;
+        let mut stack: Vec<(u32, Real)> = Vec::with_capacity(64);
+        if let Some(root) = self.nodes.first() {
+            stack.push((0, root.bounds.distance_sq(p)));
+        }
+        while let Some((node_idx, box_d2)) = stack.pop() {
+            if best.is_some_and(|(_, d)| box_d2 > d) {
+                continue;
+            }
+            let node = &self.nodes[node_idx as usize];
+            if node.count > 0 {
+                let leaf = &self.order[node.first as usize..(node.first + node.count) as usize];
+                for &prim in leaf {
+                    let d = distance_sq(prim);
+                    let better = match best {
+                        None => true,
+                        Some((best_prim, best_d)) => d < best_d || (d == best_d && prim < best_prim),
+                    };
+                    if better {
+                        best = Some((prim, d));
+                    }
+                }
+                continue;
+            }
+            let (left, right) = (node_idx + 1, node.first);
+            let dl = self.nodes[left as usize].bounds.distance_sq(p);
+            let dr = self.nodes[right as usize].bounds.distance_sq(p);
+            // Push the farther child first so the nearer one is explored first.
+            if dl <= dr {
+                stack.push((right, dr));
+                stack.push((left, dl));
+            } else {
+                stack.push((left, dl));
+                stack.push((right, dr));
+            }
+        }
+        best
+    }
+}
+
+/// Builds the subtree over `order[offset..offset + len]` (the slice passed in), appending
+/// nodes depth-first; returns the new node's index.
+fn build_node(
+    nodes: &mut Vec<Node>,
+    order: &mut [u32],
+    offset: usize,
+    boxes: &[Aabb],
+    centres: &[Vec3],
+) -> u32 {
+    let bounds = order.iter().fold(Aabb::empty(), |b, &i| b.union(&boxes[i as usize]));
+    let node_idx = nodes.len() as u32;
+    nodes.push(Node { bounds, first: offset as u32, count: order.len() as u32 });
+    if order.len() <= LEAF_SIZE {
+        return node_idx;
+    }
+
+    let spread = order.iter().fold(Aabb::empty(), |b, &i| b.grown(&centres[i as usize]));
+    let extent = spread.hi - spread.lo;
+    let axis = extent.imax();
+    let mid = order.len() / 2;
+    // Ties on the coordinate are broken by primitive index so the tree is a pure
+    // function of the input.
+    order.select_nth_unstable_by(mid, |&a, &b| {
+        centres[a as usize][axis].total_cmp(&centres[b as usize][axis]).then(a.cmp(&b))
+    });
+    let (left, right) = order.split_at_mut(mid);
+    build_node(nodes, left, offset, boxes, centres);
+    let right_idx = build_node(nodes, right, offset + mid, boxes, centres);
+    nodes[node_idx as usize].first = right_idx;
+    nodes[node_idx as usize].count = 0;
+    node_idx
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Nearest point of a random cloud, against a linear scan with the same tie rule.
+    #[test]
+    fn nearest_point_matches_linear_scan() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut random =
+            || Vec3::new(rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0), rng.gen_range(-1.0..1.0));
+        let cloud: Vec<Vec3> = (0..500).map(|_| random()).collect();
+        let boxes: Vec<Aabb> = cloud.iter().map(|p| Aabb { lo: *p, hi: *p }).collect();
+        let bvh = Bvh::build(&boxes);
+        for _ in 0..200 {
+            let q = random() * 1.5;
+            let got = bvh.nearest(&q, |i| (cloud[i as usize] - q).norm_squared()).unwrap();
+            let want = (0..cloud.len())
+                .map(|i| (i as u32, (cloud[i] - q).norm_squared()))
+                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
+                .unwrap();
+            assert_eq!(got, want);
+        }
+    }
+
+    /// Many coincident points: the lowest index must win the tie.
+    #[test]
+    fn coincident_points_resolve_to_lowest_index() {
+        let cloud = vec![Vec3::new(1.0, 2.0, 3.0); 37];
+        let boxes: Vec<Aabb> = cloud.iter().map(|p| Aabb { lo: *p, hi: *p }).collect();
+        let bvh = Bvh::build(&boxes);
+        let q = Vec3::zeros();
+        assert_eq!(bvh.nearest(&q, |i| (cloud[i as usize] - q).norm_squared()), Some((0, 14.0)));
+    }
+
+    #[test]
+    fn empty_hierarchy_has_no_nearest() {
+        let bvh = Bvh::build(&[]);
+        assert_eq!(bvh.nearest(&Vec3::zeros(), |_| 0.0), None);
+    }
+}

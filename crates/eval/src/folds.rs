@@ -1,0 +1,77 @@
+//! K-fold splits over poses for held-out evaluation of the deformation model.
+
+/// Splits the non-template poses of a `pose_count`-pose set into `k` test folds.
+///
+/// Returns, per fold, the ascending pose indices to *test* on; train on every other pose
+/// ([`training_poses`]). The non-template poses are dealt round-robin in index order
+/// (the `i`-th non-template pose goes to fold `i mod k`), so consecutive poses — often
+/// similar in a capture sequence — land in different folds; fold sizes differ by at most
+/// one. The template is never a test pose (the model is always trained on it).
+///
+/// `k` is clamped to `1..=pose_count - 1` so that no fold is empty; a pose set with only
+/// the template yields no folds.
+pub fn folds(pose_count: usize, template: usize, k: usize) -> Vec<Vec<usize>> {
+    let others: Vec<usize> = (0..pose_count).filter(|&p| p != template).collect();
+    if others.is_empty() {
+        return Vec::new();
+    }
+    let k = k.clamp(1, others.len());
+    let mut folds = vec![Vec::new(); k];
+    for (i, pose) in others.into_iter().enumerate() {
+        folds[i % k].push(pose);
+    }
+    folds
+}
+
+/// The complement of `test` in `0..pose_count`, ascending: the training poses of a fold.
+pub fn training_poses(pose_count: usize, test: &[usize]) -> Vec<usize> {
+    let mut is_test = vec![false; pose_count];
+    for &p in test {
+        is_test[p] = true;
+    }
+    (0..pose_count).filter(|&p| !is_test[p]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// 71 SCAPE-like poses into 5 folds: sizes 14 or 15, template 0 absent.
+    #[test]
+    fn scape_sized_split() {
+        let f = folds(71, 0, 5);
+        assert_eq!(f.iter().map(Vec::len).collect::<Vec<_>>(), vec![14, 14, 14, 14, 14]);
+        assert_eq!(f[0][..3], [1, 6, 11]);
+        assert_eq!(training_poses(6, &[1, 4]), vec![0, 2, 3, 5]);
+    }
+
+    #[test]
+    fn only_the_template_gives_no_folds() {
+        assert!(folds(1, 0, 5).is_empty());
+    }
+
+    proptest! {
+        /// Folds never hold the template, are disjoint, cover every other pose, and
+        /// their training sets never contain a test pose.
+        #[test]
+        fn folds_partition_the_non_template_poses(pose_count in 1usize..40, t in 0usize..40, k in 0usize..12) {
+            let template = t % pose_count;
+            let f = folds(pose_count, template, k);
+            let mut seen = vec![0u32; pose_count];
+            for fold in &f {
+                prop_assert!(!fold.is_empty());
+                prop_assert!(!fold.contains(&template));
+                let train = training_poses(pose_count, fold);
+                prop_assert!(train.contains(&template));
+                prop_assert!(fold.iter().all(|p| !train.contains(p)));
+                for &p in fold {
+                    seen[p] += 1;
+                }
+            }
+            for (p, &n) in seen.iter().enumerate() {
+                prop_assert_eq!(n, u32::from(p != template));
+            }
+        }
+    }
+}

@@ -1,0 +1,154 @@
+//! v2f and v2v against brute-force references on small random meshes, and the ordering
+//! between them that the paper's Table 1 contradicts.
+
+use desal_eval::{SurfaceIndex, v2f, v2f_halves, v2v, vertex_errors};
+use desal_mesh::{TriMesh, Vec3};
+use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Squared point–triangle distance computed a different way from the library: project
+/// onto the plane, keep the projection if its barycentric coordinates are all
+/// non-negative, otherwise take the nearest of the three edges.
+fn reference_distance_sq(p: &Vec3, [a, b, c]: [Vec3; 3]) -> f64 {
+    let segment = |s: &Vec3, t: &Vec3| {
+        let d = t - s;
+        let u =
+            if d.norm_squared() == 0.0 { 0.0 } else { ((p - s).dot(&d) / d.norm_squared()).clamp(0.0, 1.0) };
+        (p - (s + d * u)).norm_squared()
+    };
+    let edges = segment(&a, &b).min(segment(&b, &c)).min(segment(&c, &a));
+    let n = (b - a).cross(&(c - a));
+    if n.norm_squared() == 0.0 {
+        return edges;
+    }
+    let q = p - n * ((p - a).dot(&n) / n.norm_squared());
+    let inside = [(a, b), (b, c), (c, a)].iter().all(|(s, t)| (t - s).cross(&(q - s)).dot(&n) >= 0.0);
+    if inside { (p - q).norm_squared() } else { edges }
+}
+
+fn brute_to_surface(points: &[Vec3], surface: &TriMesh) -> Vec<f64> {
+    points
+        .iter()
+        .map(|p| {
+            (0..surface.face_count())
+                .map(|f| reference_distance_sq(p, surface.corners(f)))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect()
+}
+
+fn brute_to_vertex(points: &[Vec3], cloud: &[Vec3]) -> Vec<f64> {
+    points
+        .iter()
+        .map(|p| cloud.iter().map(|q| (p - q).norm_squared()).fold(f64::INFINITY, f64::min))
+        .collect()
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+/// A random triangle soup: `n` points in a unit cube, `m` faces of distinct random
+/// corners (some vertices may be unused).
+fn random_soup(rng: &mut ChaCha8Rng, n: usize, m: usize) -> TriMesh {
+    let positions = (0..n).map(|_| Vec3::new(rng.r#gen(), rng.r#gen(), rng.r#gen())).collect();
+    let faces = (0..m)
+        .map(|_| {
+            loop {
+                let f = [rng.gen_range(0..n as u32), rng.gen_range(0..n as u32), rng.gen_range(0..n as u32)];
+                if f[0] != f[1] && f[1] != f[2] && f[0] != f[2] {
+                    break f;
+                }
+            }
+        })
+        .collect();
+    TriMesh { positions, faces }
+}
+
+/// A jittered height-field grid (every vertex used by a face), like a patch of skin.
+fn jittered_grid(rng: &mut ChaCha8Rng, side: usize, jitter: f64) -> TriMesh {
+    let mut positions = Vec::new();
+    for i in 0..side {
+        for j in 0..side {
+            let mut r = || rng.gen_range(-jitter..jitter);
+            positions.push(Vec3::new(
+                i as f64 * 0.1 + r(),
+                j as f64 * 0.1 + r(),
+                0.05 * (i as f64).sin() + r(),
+            ));
+        }
+    }
+    let mut faces = Vec::new();
+    for i in 0..side as u32 - 1 {
+        for j in 0..side as u32 - 1 {
+            let v = i * side as u32 + j;
+            faces.push([v, v + side as u32, v + 1]);
+            faces.push([v + 1, v + side as u32, v + side as u32 + 1]);
+        }
+    }
+    TriMesh { positions, faces }
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-12 * a.abs().max(b.abs()) + 1e-300
+}
+
+/// A point above a flat unit square: v2f picks the plane distance, v2v the corner.
+#[test]
+fn point_over_a_square() {
+    let square = TriMesh {
+        positions: vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ],
+        faces: vec![[0, 1, 2], [0, 2, 3]],
+    };
+    let lifted = TriMesh {
+        positions: square.positions.iter().map(|p| p + Vec3::new(0.0, 0.0, 0.5)).collect(),
+        faces: square.faces.clone(),
+    };
+    // Every vertex of each mesh is 0.5 from the other's plane and from its twin vertex.
+    assert_eq!(v2f(&lifted, &square), 0.25);
+    assert_eq!(v2v(&lifted, &square), 0.25);
+    let centre = SurfaceIndex::new(&square).distances_sq(&[Vec3::new(0.3, 0.6, 2.0)]);
+    assert_eq!(centre, vec![4.0]);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// Issue 6: v2f (both halves) and v2v equal brute force over every face / vertex.
+    #[test]
+    fn metrics_match_brute_force(seed in any::<u64>(), n in 3usize..40, m in 1usize..60) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let a = random_soup(&mut rng, n, m);
+        let b = random_soup(&mut rng, n + 5, m + 3);
+        let halves = v2f_halves(&a, &b);
+        let a_to_b = brute_to_surface(&a.positions, &b);
+        let b_to_a = brute_to_surface(&b.positions, &a);
+        prop_assert!(close(halves.a_to_b, mean(&a_to_b)), "{} vs {}", halves.a_to_b, mean(&a_to_b));
+        prop_assert!(close(halves.b_to_a, mean(&b_to_a)));
+        let eq6 = (a_to_b.iter().sum::<f64>() + b_to_a.iter().sum::<f64>()) / (a_to_b.len() + b_to_a.len()) as f64;
+        prop_assert!(close(v2f(&a, &b), eq6));
+        prop_assert!(close(v2v(&a, &b), mean(&brute_to_vertex(&a.positions, &b.positions))));
+        let per_vertex = vertex_errors(&a, &b);
+        for (got, want) in per_vertex.to_surface.iter().zip(&a_to_b) {
+            prop_assert!(close(*got, *want));
+        }
+        prop_assert_eq!(per_vertex.to_vertex, brute_to_vertex(&a.positions, &b.positions));
+    }
+
+    /// Issue 6: a vertex is never farther from a surface than from that surface's
+    /// nearest vertex, so the deformed → target half of v2f is at most v2v.
+    #[test]
+    fn surface_half_never_exceeds_v2v(seed in any::<u64>(), side in 2usize..12, jitter in 0.0f64..0.05) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let target = jittered_grid(&mut rng, side, jitter);
+        let deformed = jittered_grid(&mut rng, side, jitter);
+        let half = v2f_halves(&deformed, &target).a_to_b;
+        prop_assert!(half <= v2v(&deformed, &target), "{half} > {}", v2v(&deformed, &target));
+    }
+}
