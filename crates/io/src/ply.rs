@@ -13,8 +13,8 @@ use std::sync::Arc;
 use desal_mesh::{Face, TriMesh, Vec3};
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{
-    Addable, ElementDef, Encoding, Header, Property, PropertyAccess, PropertyAccessResult, PropertyDef,
-    PropertyType, ScalarType,
+    Addable, BeginList, ElementDef, Encoding, Header, Property, PropertyAccess, PropertyAccessResult,
+    PropertyDef, PropertyType, ScalarType,
 };
 use ply_rs_bw::writer::Writer;
 
@@ -113,13 +113,13 @@ pub fn read_ply_full(path: &Path) -> Result<PlyMesh, IoError> {
     let positions: Vec<Vec3> = vertices.iter().map(|v| Vec3::new(v.p[0], v.p[1], v.p[2])).collect();
     let mut faces: Vec<Face> = Vec::with_capacity(polygons.len());
     for (fi, poly) in polygons.iter().enumerate() {
-        if poly.indices.len() < 3 {
-            return Err(IoError::bad_mesh(path, format!("face {fi} has {} vertices", poly.indices.len())));
+        let i = poly.indices();
+        if i.len() < 3 {
+            return Err(IoError::bad_mesh(path, format!("face {fi} has {} vertices", i.len())));
         }
-        if let Some(&bad) = poly.indices.iter().find(|&&i| i < 0) {
+        if let Some(&bad) = i.iter().find(|&&i| i < 0) {
             return Err(IoError::bad_mesh(path, format!("face {fi} has a negative vertex index {bad}")));
         }
-        let i = &poly.indices;
         for k in 1..i.len() - 1 {
             faces.push([i[0] as u32, i[k] as u32, i[k + 1] as u32]);
         }
@@ -279,22 +279,41 @@ impl VertexIn {
     }
 }
 
-/// A face as read: its vertex index list (any integer type, widened to i64).
+/// A face as read: its vertex index list. `int` and `uint` lists (the usual ones) are
+/// filled in place by the parser; other integer types go through the setter.
 #[derive(Debug, Clone)]
 struct FaceIn {
-    indices: Vec<i64>,
+    int: Vec<i32>,
+    uint: Vec<u32>,
+    other: Vec<i64>,
+}
+
+impl FaceIn {
+    fn indices(&self) -> Vec<i64> {
+        if !self.int.is_empty() {
+            self.int.iter().map(|&i| i64::from(i)).collect()
+        } else if !self.uint.is_empty() {
+            self.uint.iter().map(|&i| i64::from(i)).collect()
+        } else {
+            self.other.clone()
+        }
+    }
+}
+
+fn is_index_list(name: &str) -> bool {
+    name == "vertex_indices" || name == "vertex_index"
 }
 
 impl PropertyAccess for FaceIn {
     fn new() -> Self {
-        FaceIn { indices: Vec::new() }
+        FaceIn { int: Vec::new(), uint: Vec::new(), other: Vec::new() }
     }
 
     fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
-        if name != "vertex_indices" && name != "vertex_index" {
+        if !is_index_list(name) {
             return PropertyAccessResult::Ignored;
         }
-        self.indices = match property {
+        self.other = match property {
             Property::ListChar(v) => v.into_iter().map(i64::from).collect(),
             Property::ListUChar(v) => v.into_iter().map(i64::from).collect(),
             Property::ListShort(v) => v.into_iter().map(i64::from).collect(),
@@ -304,6 +323,14 @@ impl PropertyAccess for FaceIn {
             _ => return PropertyAccessResult::UnsupportedType,
         };
         PropertyAccessResult::Set
+    }
+
+    fn begin_list_int(&mut self, name: &str, _len: usize) -> BeginList<'_, i32> {
+        if is_index_list(name) { BeginList::Fill(&mut self.int) } else { BeginList::UseSetter }
+    }
+
+    fn begin_list_uint(&mut self, name: &str, _len: usize) -> BeginList<'_, u32> {
+        if is_index_list(name) { BeginList::Fill(&mut self.uint) } else { BeginList::UseSetter }
     }
 }
 

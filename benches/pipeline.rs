@@ -1,0 +1,56 @@
+//! Benchmarks of the driver's own work on the 71 SCAPE poses: ingest from PLY, and
+//! reloading the ingested artifact. Skips (with a message) without ../shared/datasets.
+//!
+//! Run: `cargo bench --bench pipeline`.
+
+use std::path::{Path, PathBuf};
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use desal::ingest;
+use desal_io::artifact::{self, PoseSetV1, Producer};
+use desal_mesh::NoProgress;
+
+fn scape_files() -> Option<Vec<PathBuf>> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/datasets/scape");
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        eprintln!("skipped: {} is absent", dir.display());
+        return None;
+    };
+    let mut files: Vec<PathBuf> =
+        entries.map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "ply")).collect();
+    files.sort();
+    Some(files)
+}
+
+fn bench_ingest(c: &mut Criterion) {
+    let Some(files) = scape_files() else { return };
+    let mut group = c.benchmark_group("scape-71");
+    group.sample_size(10);
+    group.bench_function("ingest from PLY", |b| {
+        b.iter(|| ingest::ingest_poses(&files, 0, false, &NoProgress).unwrap());
+    });
+    group.bench_function("hash pose files (cache key)", |b| {
+        b.iter(|| ingest::hash_files(&files).unwrap());
+    });
+    let (set, _) = ingest::ingest_poses(&files, 0, false, &NoProgress).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("poses.dsa");
+    let producer = Producer {
+        stage: "ingest".into(),
+        stage_version: 1,
+        tool_version: "bench".into(),
+        parameters: "{}".into(),
+        inputs: vec![],
+    };
+    artifact::write_artifact(&path, &producer, &PoseSetV1::from_pose_set(&set)).unwrap();
+    group.bench_function("reload ingested artifact", |b| {
+        b.iter(|| {
+            let (_, body, _) = artifact::read_artifact::<PoseSetV1>(&path).unwrap();
+            body.to_pose_set().unwrap()
+        });
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_ingest);
+criterion_main!(benches);
