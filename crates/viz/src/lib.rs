@@ -1,2 +1,22 @@
-//! Software rendering of a mesh with a per-vertex or per-face scalar to an RGBA image
-//! (heat maps for saliency, face areas and errors).
+//! Software rendering of a mesh with a per-vertex or per-face scalar to an RGBA image:
+//! heat maps for saliency (the paper's Fig. 1), face areas (Figs. 4–5) and errors.
+//!
+//! - [`render`]: [`render_heatmap`], an orthographic z-buffer rasteriser with Lambert
+//!   shading, front and back views side by side and a colour bar.
+//! - [`colormap()`]: the viridis colour map, also used for PLY vertex colours.
+//! - [`image`]: [`RgbaImage`] and [`encode_png`] (bytes, not files).
+//! - [`font`]: a built-in 5×7 bitmap font for labels.
+//!
+//! **Invariant:** no file system access and no GPU: the caller writes the bytes, and the
+//! output is a pure function of the mesh, the scalar and the config.
+
+pub mod colormap;
+pub mod error;
+pub mod font;
+pub mod image;
+pub mod render;
+
+pub use colormap::colormap;
+pub use error::VizError;
+pub use image::{RgbaImage, encode_png};
+pub use render::{Direction, RenderConfig, Scalar, ViewFrame, render_heatmap, resolve_frame};
