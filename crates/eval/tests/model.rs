@@ -103,9 +103,10 @@ fn mismatched_inputs_are_refused() {
     assert!(model.synthesize(&rotations[2], Vec3::zeros()).is_err());
 }
 
-/// SCAPE, all 71 poses, model fitted on all of them (in-sample): the synthesised poses
-/// must beat the rigid-part reconstruction (Q = I) by a clear margin. Prints the figures
-/// for the report.
+/// SCAPE, model fitted on all 71 poses (in-sample), checked on every fifth pose: the
+/// synthesised poses must beat the rigid-part reconstruction (Q = I) by a clear margin.
+/// Prints the figures. (Evaluating all 71 poses takes ~15 s in a debug build: see the
+/// ignored variant below, run in release for the report.)
 ///
 /// What bounds the figure: SCAPE's registration slides vertices along the surface (the
 /// median edge changes length by ~10% between the template and a pose), so much of each
@@ -113,26 +114,63 @@ fn mismatched_inputs_are_refused() {
 /// squared Frobenius residual of ~0.29 — and the Poisson solve integrates what is left.
 #[test]
 fn scape_in_sample_error_beats_rigid_parts() {
+    check_scape_in_sample(5);
+}
+
+/// The same over all 71 poses: `cargo test --release -p desal-eval --test model -- --ignored --nocapture`.
+#[test]
+#[ignore = "slow in debug builds (~15 s); run in release for the reported figure"]
+fn scape_in_sample_error_all_poses() {
+    check_scape_in_sample(1);
+}
+
+/// Held-out figure for the report: 5 folds over the non-template poses, each model
+/// fitted without its test poses. Prints only (no threshold is known to hold).
+#[test]
+#[ignore = "slow in debug builds; run in release for the reported figure"]
+fn scape_held_out_error() {
+    let Some(dir) = common::scape_dir() else { return };
+    let (poses, labels): (PoseSet, _) = common::load_scape(&dir);
+    let rotations = part_rotations(&poses, &labels);
+    let mut errors = Vec::new();
+    for test in folds(poses.pose_count(), poses.template, 5) {
+        let train = training_poses(poses.pose_count(), &test);
+        let model = fit_model(&poses, &labels, &rotations, &train, &ModelConfig::default()).unwrap();
+        for &p in &test {
+            let target = poses.pose_mesh(p);
+            let positions = model.synthesize(&rotations[p], centroid(&target.positions)).unwrap();
+            let deformed = TriMesh { positions, faces: poses.faces.clone() };
+            errors.push((v2v(&deformed, &target), v2f(&deformed, &target)));
+        }
+    }
+    let n = errors.len() as f64;
+    let (v2v_mean, v2f_mean) = errors.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + x / n, b + y / n));
+    eprintln!("SCAPE held-out (5 folds, {n} poses): v2v {v2v_mean:.3e} m², v2f {v2f_mean:.3e} m²");
+}
+
+fn check_scape_in_sample(pose_stride: usize) {
     let Some(dir) = common::scape_dir() else { return };
     let (poses, labels): (PoseSet, _) = common::load_scape(&dir);
     let rotations = part_rotations(&poses, &labels);
     let all: Vec<usize> = (0..poses.pose_count()).collect();
     let model = fit_model(&poses, &labels, &rotations, &all, &ModelConfig::default()).unwrap();
-    let centroids: Vec<Vec3> = poses.poses.iter().map(|p| centroid(p)).collect();
-    let synthesised = model.synthesize_many(&rotations, &centroids).unwrap();
+    let checked: Vec<usize> = (0..poses.pose_count()).step_by(pose_stride).collect();
+    let centroids: Vec<Vec3> = checked.iter().map(|&p| centroid(&poses.poses[p])).collect();
+    let checked_rotations: Vec<Vec<Mat3>> = checked.iter().map(|&p| rotations[p].clone()).collect();
+    let synthesised = model.synthesize_many(&checked_rotations, &centroids).unwrap();
     let solver = PoissonSolver::new(poses.template_positions(), &poses.faces).unwrap();
     let mesh = |positions: Vec<Vec3>| TriMesh { positions, faces: poses.faces.clone() };
     let (mut model_v2v, mut model_v2f, mut rigid_v2v) = (0.0, 0.0, 0.0);
-    for (p, positions) in synthesised.into_iter().enumerate() {
+    for ((&p, positions), c) in checked.iter().zip(synthesised).zip(&centroids) {
         let target = poses.pose_mesh(p);
         let deformed = mesh(positions);
         model_v2v += v2v(&deformed, &target);
         model_v2f += v2f(&deformed, &target);
         let rigid: Vec<Mat3> =
             model.skeleton().triangle_parts.iter().map(|&k| rotations[p][k as usize]).collect();
-        rigid_v2v += v2v(&mesh(solver.solve(&rigid, &centroids[p])), &target);
+        rigid_v2v += v2v(&mesh(solver.solve(&rigid, c)), &target);
     }
-    let n = poses.pose_count() as f64;
+    let n = checked.len() as f64;
     let (model_v2v, model_v2f, rigid_v2v) = (model_v2v / n, model_v2f / n, rigid_v2v / n);
     eprintln!(
         "SCAPE in-sample over {n} poses: model v2v {model_v2v:.3e} m², v2f {model_v2f:.3e} m²; \
