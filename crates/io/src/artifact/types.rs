@@ -62,3 +62,57 @@ impl LabelsV1 {
         PartLabels::try_new(self.labels.clone(), self.names.clone())
     }
 }
+
+/// Stage 1's result: per pose and part, the fitted transform and its residual figures,
+/// and every per-vertex residual distance.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitV1 {
+    /// `rigid` or `affine`.
+    pub model: String,
+    pub pose_names: Vec<String>,
+    pub part_names: Vec<String>,
+    pub template: u32,
+    pub vertex_count: u32,
+    /// Per `(pose, part)`, pose-major (`pose * parts + part`): the 3x3 linear part, row-major.
+    pub linear: Vec<[f64; 9]>,
+    /// Per `(pose, part)`: the translation.
+    pub translation: Vec<[f64; 3]>,
+    /// Per `(pose, part)`: RMS, mean and max residual distance (mesh units).
+    pub rms: Vec<f64>,
+    pub mean: Vec<f64>,
+    pub max: Vec<f64>,
+    /// Per `(pose, vertex)`, pose-major: residual distance `|R v_T + t - v_X|`.
+    pub residuals: Vec<f32>,
+    /// Per part, worst first: `(part, mean, max, worst pose)`.
+    pub worst_parts: Vec<(u32, f64, f64, u32)>,
+    /// Per pose, worst first: `(pose, mean, max, worst part)`.
+    pub worst_poses: Vec<(u32, f64, f64, u32)>,
+}
+
+impl ArtifactBody for FitV1 {
+    const KIND: ArtifactKind = ArtifactKind::Fit;
+}
+
+/// Stage 2's result, per template vertex.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SaliencyV1 {
+    /// Normalised saliency in [0, 1].
+    pub saliency: Vec<f64>,
+    /// Stage-3 weights in [floor, 1].
+    pub weights: Vec<f64>,
+    /// Raw per-vertex sums (mesh units, or squared units when `distance` is `squared`).
+    pub raw: Vec<f64>,
+    pub normaliser: f64,
+    /// `plain` or `squared`.
+    pub distance: String,
+    /// `max` or `p<percentile>`.
+    pub normalisation: String,
+    pub weight_floor: f64,
+    pub poses_used: Vec<String>,
+    pub poses_excluded: Vec<String>,
+    pub rigid: bool,
+}
+
+impl ArtifactBody for SaliencyV1 {
+    const KIND: ArtifactKind = ArtifactKind::Saliency;
+}

@@ -1,8 +1,11 @@
 //! Stage adapters: for each stage, its cache key, the call into its crate, the
 //! conversion to and from its artifact, and the files it leaves in the output folder.
 
+pub mod fit;
+pub mod saliency;
+
 use anyhow::Result;
-use desal_io::artifact::{ArtifactKind, LabelsV1, PoseSetV1};
+use desal_io::artifact::{ArtifactKind, FitV1, LabelsV1, PoseSetV1, SaliencyV1};
 use serde_json::json;
 
 use crate::cache::StageKey;
@@ -74,21 +77,38 @@ pub fn run_stages(
         Ok((LabelsV1::from_labels(&labels), summary, note))
     })?;
 
+    let part_labels = labels.body.to_labels()?;
+
+    // Stage 1: per-part rigid fit of the template onto every pose.
+    let key = fit::key(&spec.fit, poses.hash, labels.hash);
+    let fitted =
+        runner.stage(Stage::Fit, key, &[], || fit::compute(&spec.fit, &set, &part_labels, progress))?;
+
+    // Stage 2: deformation saliency from the residuals.
+    let diagonal = set.template_mesh().diagonal();
+    let key = saliency::key(&spec.saliency, poses.hash, fitted.hash);
+    let salient = runner
+        .stage(Stage::Saliency, key, &[], || saliency::compute(&spec.saliency, &fitted.body, diagonal))?;
+
     let counts = Counts { vertices: set.vertex_count(), faces: set.face_count(), poses: set.pose_count() };
-    let ingest_summary = poses.summary.clone();
-    let labels_summary = labels.summary.clone();
-    Ok(DatasetOutputs {
-        input: counts.clone(),
-        output: counts,
-        artifacts: vec![
-            ("poses.dsa".into(), poses.artifact_path),
-            ("labels.dsa".into(), labels.artifact_path),
-        ],
-        files: vec![
-            ("poses.json".into(), Box::new(move |p| Ok(desal_io::write_json(p, &ingest_summary)?))),
-            ("labels.json".into(), Box::new(move |p| Ok(desal_io::write_json(p, &labels_summary)?))),
-        ],
-    })
+    let mut outputs =
+        DatasetOutputs { input: counts.clone(), output: counts, artifacts: Vec::new(), files: Vec::new() };
+    add_artifact(&mut outputs, "poses", poses.artifact_path, poses.summary);
+    add_artifact(&mut outputs, "labels", labels.artifact_path, labels.summary);
+    add_artifact(&mut outputs, "fit", fitted.artifact_path, fitted.summary);
+    add_artifact(&mut outputs, "saliency", salient.artifact_path, salient.summary);
+    Ok(outputs)
+}
+
+/// Puts `<name>.dsa` (the cached artifact) and `<name>.json` (its summary) in the outputs.
+fn add_artifact(
+    outputs: &mut DatasetOutputs,
+    name: &str,
+    artifact: std::path::PathBuf,
+    summary: serde_json::Value,
+) {
+    outputs.artifacts.push((format!("{name}.dsa"), artifact));
+    outputs.files.push((format!("{name}.json"), Box::new(move |p| Ok(desal_io::write_json(p, &summary)?))));
 }
 
 fn file_name(path: &std::path::Path) -> String {
@@ -97,8 +117,12 @@ fn file_name(path: &std::path::Path) -> String {
 
 /// Summary lines of a stage artifact for `desal inspect`.
 pub fn describe_stage_artifact(path: &std::path::Path, kind: ArtifactKind, out: &mut String) -> Result<()> {
+    use desal_io::artifact::read_artifact;
     use std::fmt::Write as _;
-    let _ = path;
-    writeln!(out, "    ({kind} artifacts are summarised once their stage is wired in)")?;
+    match kind {
+        ArtifactKind::Fit => fit::describe(&read_artifact::<FitV1>(path)?.1, out),
+        ArtifactKind::Saliency => saliency::describe(&read_artifact::<SaliencyV1>(path)?.1, out),
+        _ => writeln!(out, "    ({kind} artifacts are summarised once their stage is wired in)")?,
+    }
     Ok(())
 }
