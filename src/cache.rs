@@ -201,6 +201,7 @@ impl Cache {
         let _ = fs::remove_dir_all(&tmp);
         fs::create_dir_all(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
         let hash = artifact::write_artifact(&tmp.join("artifact.dsa"), producer, body)?;
+        fault_point(&key.stage);
         desal_io::write_json(&tmp.join("summary.json"), summary)?;
         desal_io::write_json(&tmp.join("key.json"), key)?;
         if dir.exists() {
@@ -236,6 +237,15 @@ impl Cache {
     /// Records `key` as the last run of its stage for `dataset`.
     pub fn record(&self, dataset: &str, key: &StageKey) -> Result<()> {
         Ok(desal_io::write_json(&self.explain_path(dataset, &key.stage), key)?)
+    }
+}
+
+/// Test hook: with `DESAL_FAULT_ABORT_IN_STORE=<stage>`, the process aborts halfway
+/// through storing that stage's entry, as a killed run would. The end-to-end tests use it
+/// to prove that a killed run leaves no entry behind.
+fn fault_point(stage: &str) {
+    if std::env::var("DESAL_FAULT_ABORT_IN_STORE").is_ok_and(|s| s == stage) {
+        std::process::abort();
     }
 }
 

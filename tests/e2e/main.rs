@@ -1,5 +1,6 @@
 //! End-to-end tests of the real binaries: one test binary, one temp folder per test.
 
 mod artifacts;
+mod cache;
 mod ingest;
 mod support;
