@@ -1,0 +1,142 @@
+//! The CC0 MakeHuman source assets, read as shipped in `data-samples/source/`: the base
+//! mesh (`base.obj`), the `cmu_mb` rig, its skinning weights and the base mesh's named
+//! vertex groups.
+//!
+//! Everything here is in the OBJ's own frame and units (decimetres, Y up, the body
+//! facing +Z, its left side at +X). The rig's `default_position` numbers are in
+//! Blender's Z-up frame and are deliberately never read: joints are placed from the
+//! base mesh's joint cubes instead (see `skeleton.rs`).
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use desal_mesh::TriMesh;
+use serde::Deserialize;
+
+use crate::error::SampleError;
+
+/// File names of the assets inside a source folder.
+pub const BASE_MESH_FILE: &str = "base.obj";
+pub const RIG_FILE: &str = "rig.cmu_mb.json";
+pub const WEIGHTS_FILE: &str = "weights.cmu_mb.json";
+pub const GROUPS_FILE: &str = "basemesh_vertex_groups.json";
+
+/// Where a joint (a bone's head or tail) sits in the rest pose.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum JointSpec {
+    /// The centroid of a named vertex group of the base mesh (a "joint cube").
+    Group(String),
+    /// The mean of these base-mesh vertices.
+    Mean(Vec<u32>),
+}
+
+/// One bone of the rig as the file describes it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RigBone {
+    /// Parent bone name; empty for the root.
+    pub parent: String,
+    pub head: JointSpec,
+    pub tail: JointSpec,
+}
+
+/// All source assets, parsed. Maps are ordered by name, so every iteration over them
+/// is deterministic.
+#[derive(Debug, Clone)]
+pub struct SourceAssets {
+    /// The whole base mesh (body, helper geometry and joint cubes), fan-triangulated, in
+    /// OBJ vertex order and units (decimetres).
+    pub base: TriMesh,
+    /// Bones by name.
+    pub rig: BTreeMap<String, RigBone>,
+    /// Skinning weights: bone name → `(base-mesh vertex, weight)` in file order.
+    pub weights: BTreeMap<String, Vec<(u32, f64)>>,
+    /// Vertex groups: name → inclusive `[first, last]` base-mesh vertex ranges.
+    pub groups: BTreeMap<String, Vec<[u32; 2]>>,
+}
+
+impl SourceAssets {
+    /// Reads the four asset files from `dir` (see the `*_FILE` constants).
+    pub fn load(dir: &Path) -> Result<Self, SampleError> {
+        let base = desal_io::read_mesh(&dir.join(BASE_MESH_FILE))?;
+        let rig = parse_rig(&read_text(&dir.join(RIG_FILE))?, &dir.join(RIG_FILE))?;
+        let weights = parse_weights(&read_text(&dir.join(WEIGHTS_FILE))?, &dir.join(WEIGHTS_FILE))?;
+        let groups = parse_groups(&read_text(&dir.join(GROUPS_FILE))?, &dir.join(GROUPS_FILE))?;
+        Ok(Self { base, rig, weights, groups })
+    }
+
+    /// The base-mesh vertex indices of group `name`, ascending as listed (`None` when
+    /// there is no such group).
+    pub fn group_vertices(&self, name: &str) -> Option<Vec<u32>> {
+        let ranges = self.groups.get(name)?;
+        Some(ranges.iter().flat_map(|&[first, last]| first..=last).collect())
+    }
+}
+
+fn read_text(path: &Path) -> Result<String, SampleError> {
+    std::fs::read_to_string(path)
+        .map_err(|source| SampleError::Io(desal_io::IoError::Io { path: path.to_owned(), source }))
+}
+
+fn json_error(path: &Path, e: impl std::fmt::Display) -> SampleError {
+    SampleError::Json { path: path.to_owned(), reason: e.to_string() }
+}
+
+/// The rig file's per-bone record; fields this generator does not use (roll,
+/// `default_position`, Blender flags) are ignored.
+#[derive(Deserialize)]
+struct RigBoneJson {
+    parent: String,
+    head: JointJson,
+    tail: JointJson,
+}
+
+#[derive(Deserialize)]
+struct JointJson {
+    cube_name: Option<String>,
+    vertex_indices: Option<Vec<u32>>,
+}
+
+#[derive(Deserialize)]
+struct WeightsJson {
+    weights: BTreeMap<String, Vec<(u32, f64)>>,
+}
+
+/// Parses a rig file (`rig.cmu_mb.json`): bone name → parent, head, tail. `path` only
+/// names the file in errors.
+pub fn parse_rig(text: &str, path: &Path) -> Result<BTreeMap<String, RigBone>, SampleError> {
+    let raw: BTreeMap<String, RigBoneJson> = serde_json::from_str(text).map_err(|e| json_error(path, e))?;
+    raw.into_iter()
+        .map(|(name, bone)| {
+            let head = joint_spec(&name, bone.head)?;
+            let tail = joint_spec(&name, bone.tail)?;
+            Ok((name, RigBone { parent: bone.parent, head, tail }))
+        })
+        .collect()
+}
+
+fn joint_spec(bone: &str, joint: JointJson) -> Result<JointSpec, SampleError> {
+    match (joint.cube_name, joint.vertex_indices) {
+        (Some(group), _) => Ok(JointSpec::Group(group)),
+        (None, Some(vertices)) if !vertices.is_empty() => Ok(JointSpec::Mean(vertices)),
+        _ => Err(SampleError::UnknownJointStrategy { bone: bone.to_owned() }),
+    }
+}
+
+/// Parses a weights file (`weights.cmu_mb.json`, key `weights`: bone → `[[vertex,
+/// weight], ...]`).
+pub fn parse_weights(text: &str, path: &Path) -> Result<BTreeMap<String, Vec<(u32, f64)>>, SampleError> {
+    let raw: WeightsJson = serde_json::from_str(text).map_err(|e| json_error(path, e))?;
+    Ok(raw.weights)
+}
+
+/// Parses a vertex-group file (`basemesh_vertex_groups.json`: name → `[[first, last],
+/// ...]`, inclusive ranges).
+pub fn parse_groups(text: &str, path: &Path) -> Result<BTreeMap<String, Vec<[u32; 2]>>, SampleError> {
+    serde_json::from_str(text).map_err(|e| json_error(path, e))
+}
+
+/// The source folder shipped in this repository (`data-samples/source`), located from
+/// this crate's manifest at compile time.
+pub fn repository_source_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data-samples/source")
+}

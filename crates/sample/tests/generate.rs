@@ -1,0 +1,158 @@
+//! The generator on the real, shipped MakeHuman assets (`data-samples/source`): the
+//! committed sample regenerates byte for byte, the template is the base body exactly,
+//! every pose is registered and clean, every part is a usable patch.
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use desal_mesh::math::UnitQuat;
+use desal_mesh::{EdgeTopology, TriMesh};
+use desal_sample::{Sample, SampleConfig, Skeleton, SkinWeights, SourceAssets, generate, standard_poses};
+
+fn data_samples() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data-samples")
+}
+
+fn assets() -> &'static SourceAssets {
+    static ASSETS: OnceLock<SourceAssets> = OnceLock::new();
+    ASSETS.get_or_init(|| SourceAssets::load(&data_samples().join("source")).expect("shipped source assets"))
+}
+
+fn sample() -> &'static Sample {
+    static SAMPLE: OnceLock<Sample> = OnceLock::new();
+    SAMPLE.get_or_init(|| generate(assets(), &standard_poses(), &SampleConfig::default()).expect("generate"))
+}
+
+#[test]
+fn the_committed_sample_regenerates_byte_for_byte() {
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("desal-sample-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let written = desal_sample::write_sample(&out, sample()).unwrap();
+    for path in &written {
+        let relative = path.strip_prefix(&out).unwrap();
+        let committed = data_samples().join(relative);
+        let expected = std::fs::read(&committed).unwrap_or_else(|e| {
+            panic!("{}: {e}; regenerate the sample (see data-samples/README.md)", committed.display())
+        });
+        let found = std::fs::read(path).unwrap();
+        assert!(
+            expected == found,
+            "{} differs from the generator's output; regenerate it",
+            relative.display()
+        );
+    }
+    // No stale pose files: the committed poses are exactly the generated ones.
+    let listing = |dir: &Path| {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    };
+    assert_eq!(listing(&data_samples().join("poses")), listing(&out.join("poses")));
+    std::fs::remove_dir_all(&out).unwrap();
+}
+
+#[test]
+fn the_body_is_a_closed_manifold_of_26756_triangles() {
+    let body = desal_sample::extract_body(&assets().base, 13380).unwrap();
+    assert_eq!(body.vertex_count(), 13380);
+    assert_eq!(body.face_count(), 26756);
+    let topology = EdgeTopology::new(&body.faces);
+    assert_eq!(topology.boundary_edge_count(), 0);
+    assert_eq!(topology.non_manifold_edge_count(), 0);
+}
+
+#[test]
+fn the_template_is_the_base_body_in_metres_exactly() {
+    let sample = sample();
+    assert_eq!(sample.poses.template, 0);
+    assert_eq!(sample.poses.names[0], "00_rest");
+    let body = &assets().base.positions[..13380];
+    for (v, (p, q)) in body.iter().zip(&sample.poses.poses[0]).enumerate() {
+        assert!(*q == p * 0.1, "vertex {v}: {q:?} is not {p:?} x 0.1");
+    }
+    // And on disk, as f32.
+    let rest = desal_io::read_mesh(&data_samples().join("poses/00_rest.ply")).unwrap();
+    for (p, q) in body.iter().zip(&rest.positions) {
+        assert_eq!(q.map(|c| c as f32), (p * 0.1).map(|c| c as f32));
+    }
+}
+
+#[test]
+fn identity_rotations_reproduce_the_body_exactly() {
+    let skeleton = Skeleton::from_assets(assets()).unwrap();
+    let body = &assets().base.positions[..13380];
+    let (weights, report) = SkinWeights::from_bone_lists(&skeleton, &assets().weights, 13380).unwrap();
+    assert!(report.unweighted_vertices.is_empty());
+    let world = skeleton.forward_kinematics(&vec![UnitQuat::identity(); skeleton.bone_count()]);
+    assert_eq!(desal_sample::skin(body, &weights, &world), body);
+}
+
+#[test]
+fn turning_one_bone_moves_exactly_the_vertices_of_its_subtree() {
+    let skeleton = Skeleton::from_assets(assets()).unwrap();
+    let body = &assets().base.positions[..13380];
+    let (weights, _) = SkinWeights::from_bone_lists(&skeleton, &assets().weights, 13380).unwrap();
+    let forearm = skeleton.index_of("LeftForeArm").unwrap();
+    let mut local = vec![UnitQuat::identity(); skeleton.bone_count()];
+    local[forearm] = UnitQuat::from_scaled_axis(desal_mesh::Vec3::x() * 0.5);
+    let posed = desal_sample::skin(body, &weights, &skeleton.forward_kinematics(&local));
+    let mut moved = 0;
+    for v in 0..body.len() {
+        let influenced = weights.of(v).any(|(b, _)| skeleton.is_in_subtree(b, forearm));
+        if influenced {
+            moved += 1;
+            assert_ne!(posed[v], body[v], "vertex {v} is weighted to the forearm chain but did not move");
+        } else {
+            assert_eq!(posed[v], body[v], "vertex {v} is not weighted to the forearm chain but moved");
+        }
+    }
+    // The forearm, hand and fingers: a few thousand vertices, not the whole body.
+    assert!((1000..4000).contains(&moved), "{moved} vertices moved");
+}
+
+#[test]
+fn every_committed_pose_is_registered_to_the_template() {
+    let poses_dir = data_samples().join("poses");
+    let template: TriMesh = desal_io::read_mesh(&poses_dir.join("00_rest.ply")).unwrap();
+    for name in &sample().poses.names {
+        let mesh = desal_io::read_mesh(&poses_dir.join(format!("{name}.ply"))).unwrap();
+        assert_eq!(mesh.vertex_count(), template.vertex_count(), "{name}");
+        assert_eq!(mesh.faces, template.faces, "{name}");
+    }
+    assert!(sample().poses.names.len() >= 10);
+}
+
+#[test]
+fn every_pose_is_clean_and_on_the_ground() {
+    let report = &sample().report;
+    assert_eq!(report.rest_self_intersections, 0);
+    let floor = |p: &[desal_mesh::Vec3]| p.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+    let rest_floor = floor(&sample().poses.poses[0]);
+    for (pose, positions) in report.poses.iter().zip(&sample().poses.poses) {
+        assert_eq!(pose.quality.inverted_faces, 0, "{}", pose.name);
+        assert_eq!(pose.quality.self_intersections, 0, "{}", pose.name);
+        assert!(pose.quality.min_area_ratio > 0.05, "{}: {:?}", pose.name, pose.quality);
+        assert!((floor(positions) - rest_floor).abs() < 1e-12, "{}", pose.name);
+        if pose.name != "00_rest" {
+            assert!(pose.max_displacement > 0.05, "{} barely moves", pose.name);
+        }
+    }
+}
+
+#[test]
+fn the_committed_labels_have_16_single_patch_parts() {
+    let labels = desal_io::labels::read_labels(&data_samples().join("labels.json")).unwrap();
+    assert_eq!(labels, sample().labels);
+    assert_eq!(labels.vertex_count(), 13380);
+    assert_eq!(labels.names, desal_sample::parts::PART_NAMES.map(String::from).to_vec());
+    let counts: Vec<usize> = labels.members().iter().map(Vec::len).collect();
+    assert!(counts.iter().all(|&n| n >= 100), "{counts:?}");
+    assert_eq!(desal_sample::parts::part_pieces(&labels, &sample().poses.faces), vec![1; 16]);
+    labels.check_parts_fittable(&sample().poses.poses[0]).unwrap();
+    // The text form says the same.
+    let text = desal_io::labels::read_labels(&data_samples().join("labels.txt")).unwrap();
+    assert_eq!(text, labels);
+}
