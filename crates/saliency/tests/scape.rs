@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use desal_fit::{FitConfig, fit_pose_set};
+use desal_fit::{FitConfig, FitResult, fit_pose_set};
 use desal_mesh::math::Real;
 use desal_mesh::{EdgeTopology, NoProgress, PartLabels, PoseSet};
 use desal_saliency::{Normalisation, ResidualTable, SaliencyConfig, compute_saliency};
@@ -56,6 +56,16 @@ fn joint_vertices(poses: &PoseSet, labels: &PartLabels, rings: usize) -> Vec<boo
     near
 }
 
+fn table_of(fit: &FitResult, length_scale: Real) -> ResidualTable<'_> {
+    ResidualTable {
+        values: &fit.residuals,
+        vertex_count: fit.vertex_count,
+        pose_names: &fit.pose_names,
+        template: Some(fit.template),
+        length_scale,
+    }
+}
+
 fn mean_over(values: &[Real], keep: impl Fn(usize) -> bool) -> Real {
     let (sum, count) =
         (0..values.len()).filter(|&v| keep(v)).fold((0.0, 0usize), |(s, c), v| (s + values[v], c + 1));
@@ -65,24 +75,27 @@ fn mean_over(values: &[Real], keep: impl Fn(usize) -> bool) -> Real {
 #[test]
 fn scape_saliency_is_high_at_joints_and_low_on_head_and_hands() {
     let Some((poses, labels)) = load_scape() else { return };
-    let start = Instant::now();
-    let fit = fit_pose_set(&poses, &labels, &FitConfig::default(), &NoProgress).unwrap();
-    let fitted = start.elapsed();
-    let table = ResidualTable {
-        values: &fit.residuals,
-        vertex_count: fit.vertex_count,
-        pose_names: &fit.pose_names,
-        template: Some(fit.template),
-        length_scale: poses.template_mesh().diagonal(),
-    };
-    let saliency = compute_saliency(&table, &SaliencyConfig::default()).unwrap();
-    let total = start.elapsed();
+    let diagonal = poses.template_mesh().diagonal();
+    // Timings are printed for the record, never asserted; the best of five runs hides
+    // thread-pool start-up and other load on the machine.
+    let mut times = Vec::new();
+    for _ in 0..5 {
+        let start = Instant::now();
+        let fit = fit_pose_set(&poses, &labels, &FitConfig::default(), &NoProgress).unwrap();
+        let fitted = start.elapsed();
+        compute_saliency(&table_of(&fit, diagonal), &SaliencyConfig::default()).unwrap();
+        times.push((fitted.as_secs_f64() * 1e3, (start.elapsed() - fitted).as_secs_f64() * 1e3));
+    }
+    times.sort_by(|a, b| (a.0 + a.1).total_cmp(&(b.0 + b.1)));
     eprintln!(
-        "SCAPE fit {:.2} ms + saliency {:.2} ms = {:.2} ms",
-        fitted.as_secs_f64() * 1e3,
-        (total - fitted).as_secs_f64() * 1e3,
-        total.as_secs_f64() * 1e3
+        "SCAPE 71 poses, best of 5: fit {:.2} ms + saliency {:.2} ms (slowest run {:.2} ms in all)",
+        times[0].0,
+        times[0].1,
+        times[4].0 + times[4].1
     );
+    let fit = fit_pose_set(&poses, &labels, &FitConfig::default(), &NoProgress).unwrap();
+    let table = table_of(&fit, diagonal);
+    let saliency = compute_saliency(&table, &SaliencyConfig::default()).unwrap();
 
     // The independently measured range of the per-vertex sums: about 0.23 m to 5.6 m.
     let report = &saliency.report;

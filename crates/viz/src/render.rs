@@ -86,7 +86,14 @@ impl Direction {
 
     /// A caption such as `+Z`.
     pub fn label(self) -> &'static str {
-        ["+X", "-X", "+Y", "-Y", "+Z", "-Z"][self as usize]
+        match self {
+            Direction::PosX => "+X",
+            Direction::NegX => "-X",
+            Direction::PosY => "+Y",
+            Direction::NegY => "-Y",
+            Direction::PosZ => "+Z",
+            Direction::NegZ => "-Z",
+        }
     }
 }
 
