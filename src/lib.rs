@@ -8,6 +8,7 @@
 pub mod cache;
 pub mod ingest;
 pub mod inspect;
+pub mod pictures;
 pub mod pipeline;
 pub mod progress;
 pub mod run;

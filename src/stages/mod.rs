@@ -97,7 +97,38 @@ pub fn run_stages(
     add_artifact(&mut outputs, "labels", labels.artifact_path, labels.summary);
     add_artifact(&mut outputs, "fit", fitted.artifact_path, fitted.summary);
     add_artifact(&mut outputs, "saliency", salient.artifact_path, salient.summary);
+    add_saliency_pictures(
+        &mut outputs,
+        set.template_mesh(),
+        salient.body.saliency.clone(),
+        spec.up_axis.as_deref(),
+    )?;
     Ok(outputs)
+}
+
+/// `saliency.png` (the paper's Fig. 1) and `saliency.ply` (colours + a `saliency`
+/// float property) of the template.
+fn add_saliency_pictures(
+    outputs: &mut DatasetOutputs,
+    template: desal_mesh::TriMesh,
+    saliency: Vec<f64>,
+    up_axis: Option<&str>,
+) -> Result<()> {
+    let up = crate::pictures::parse_up_axis(up_axis)?;
+    let png = crate::pictures::heatmap_png(
+        &template,
+        desal_viz::Scalar::PerVertex(&saliency),
+        up,
+        "deformation saliency",
+        "0-1",
+        Some((0.0, 1.0)),
+    )?;
+    outputs.files.push(("saliency.png".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, &png)?))));
+    outputs.files.push((
+        "saliency.ply".into(),
+        Box::new(move |p| crate::pictures::write_scalar_ply(p, &template, "saliency", &saliency)),
+    ));
+    Ok(())
 }
 
 /// Puts `<name>.dsa` (the cached artifact) and `<name>.json` (its summary) in the outputs.

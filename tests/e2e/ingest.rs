@@ -166,3 +166,23 @@ fn scape_pipeline_ingests_all_71_poses() {
     assert_eq!(report["input"]["vertices"], 12500);
     assert_eq!(report["input"]["faces"], 24998);
 }
+
+#[test]
+fn bundled_sample_runs_end_to_end_and_writes_pictures() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/sample.toml");
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet", "--out", dir.path().to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let sample = dir.path().join("sample");
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(sample.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["input"]["poses"], 11);
+    assert_eq!(report["input"]["vertices"], 13380);
+    let png = std::fs::read(sample.join("saliency.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let ply = desal_io::ply::read_ply_full(&sample.join("saliency.ply")).unwrap();
+    let saliency = &ply.scalars.iter().find(|(n, _)| n == "saliency").expect("saliency property").1;
+    assert_eq!(saliency.len(), 13380);
+    assert!(saliency.iter().all(|s| (0.0..=1.0).contains(s)));
+    assert_eq!(saliency.iter().cloned().fold(0.0, f32::max), 1.0, "normalised by the max");
+}
