@@ -10,6 +10,11 @@
 //!
 //! Empty inputs: a mean over zero vertices is NaN; a distance to a surface with no
 //! faces (or a cloud with no points) is +∞.
+//!
+//! Ordering: when every vertex of the target is used by one of its faces, a vertex's
+//! distance to the target surface never exceeds its distance to the nearest target
+//! vertex, so the deformed → target half of v2f is at most v2v (tested). Unreferenced
+//! target vertices count for v2v but not for the surface.
 
 use desal_mesh::{Real, TriMesh, Vec3};
 use rayon::prelude::*;
