@@ -6,6 +6,8 @@
 //! progress bars; the stage crates see data and config structs only.
 
 pub mod cache;
+pub mod cli;
+pub mod evaluate;
 pub mod ingest;
 pub mod inspect;
 pub mod pictures;

@@ -51,6 +51,10 @@ enum Command {
         #[arg(long)]
         explain: bool,
     },
+    /// Stage 1 alone: per-part rigid fit on artifacts.
+    Fit(desal::cli::FitArgs),
+    /// Stage 2 alone: deformation saliency from a fit.
+    Saliency(desal::cli::SaliencyArgs),
     /// Describe artifacts: kind, version, producer, inputs, summary figures.
     Inspect {
         #[arg(required = true)]
@@ -83,6 +87,8 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", desal::run::summary_table(&reports));
             Ok(())
         }
+        Command::Fit(args) => desal::cli::fit(&args),
+        Command::Saliency(args) => desal::cli::saliency(&args),
         Command::Inspect { files } => {
             for file in files {
                 print!("{}", desal::inspect::describe(&file)?);

@@ -2,5 +2,6 @@
 
 mod artifacts;
 mod cache;
+mod eval;
 mod ingest;
 mod support;

@@ -1,0 +1,135 @@
+//! The single-stage commands, shared by `desal <stage>` and the `desal-<stage>` binaries:
+//! artifacts (or plain files) in, one artifact out, for debugging and for other
+//! people's pipelines. The artifacts are byte-identical to those `desal run` makes.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use desal_io::artifact::{self, ArtifactBody, FitV1, LabelsV1, PoseSetV1, SaliencyV1};
+use desal_mesh::NoProgress;
+
+use crate::pipeline::{FitParams, SaliencyParams};
+use crate::stages;
+
+/// `desal fit`: stage 1 on an ingested pose set and labels.
+#[derive(Debug, clap::Args)]
+pub struct FitArgs {
+    /// Pose-set artifact (`poses.dsa` from `desal run`).
+    #[arg(long)]
+    pub poses: PathBuf,
+    /// Labels artifact (`labels.dsa`).
+    #[arg(long)]
+    pub labels: PathBuf,
+    /// Where to write the fit artifact.
+    #[arg(long, short)]
+    pub output: PathBuf,
+    /// `rigid` (Kabsch) or `affine` (the paper's literal fit, for the ablation).
+    #[arg(long, default_value = "rigid")]
+    pub method: String,
+}
+
+/// `desal saliency`: stage 2 on a fit.
+#[derive(Debug, clap::Args)]
+pub struct SaliencyArgs {
+    /// Pose-set artifact the fit was made from.
+    #[arg(long)]
+    pub poses: PathBuf,
+    /// Fit artifact (`fit.dsa`).
+    #[arg(long)]
+    pub fit: PathBuf,
+    /// Where to write the saliency artifact.
+    #[arg(long, short)]
+    pub output: PathBuf,
+    /// Sum squared residual distances.
+    #[arg(long)]
+    pub squared: bool,
+    /// Normalise by this percentile of the per-vertex sums (100 = the maximum).
+    #[arg(long, default_value_t = 100.0)]
+    pub percentile: f64,
+    /// Leave this pose out of the sum (repeatable).
+    #[arg(long)]
+    pub exclude: Vec<String>,
+    /// Weight floor for stage 3.
+    #[arg(long)]
+    pub floor: Option<f64>,
+    /// Also write the heat map PNG here.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Also write the template with colours and a `saliency` property here.
+    #[arg(long)]
+    pub ply: Option<PathBuf>,
+    /// Up axis for the picture (x, y, z, optionally signed); detected when absent.
+    #[arg(long)]
+    pub up_axis: Option<String>,
+}
+
+fn read<T: ArtifactBody>(path: &Path) -> Result<(T, desal_io::ContentHash)> {
+    let (_, body, hash) = artifact::read_artifact::<T>(path)?;
+    Ok((body, hash))
+}
+
+/// Prints the stage's one-line note and where the artifact went.
+fn done(note: &str, output: &Path) {
+    eprintln!("{note}");
+    eprintln!("wrote {}", output.display());
+}
+
+pub fn fit(args: &FitArgs) -> Result<()> {
+    let (poses, poses_hash) = read::<PoseSetV1>(&args.poses)?;
+    let (labels, labels_hash) = read::<LabelsV1>(&args.labels)?;
+    let set = poses.to_pose_set().with_context(|| format!("{}", args.poses.display()))?;
+    let labels = labels.to_labels().with_context(|| format!("{}", args.labels.display()))?;
+    labels
+        .check_vertex_count(set.vertex_count())
+        .with_context(|| format!("{} does not belong to {}", args.labels.display(), args.poses.display()))?;
+    let params = FitParams { method: args.method.clone() };
+    let key = stages::fit::key(&params, poses_hash, labels_hash);
+    let (body, _, note) = stages::fit::compute(&params, &set, &labels, &NoProgress)?;
+    artifact::write_artifact(&args.output, &key.producer(&[]), &body)?;
+    done(&note, &args.output);
+    Ok(())
+}
+
+pub fn saliency(args: &SaliencyArgs) -> Result<()> {
+    let (poses, poses_hash) = read::<PoseSetV1>(&args.poses)?;
+    let (fit, fit_hash) = read::<FitV1>(&args.fit)?;
+    let set = poses.to_pose_set().with_context(|| format!("{}", args.poses.display()))?;
+    if fit.vertex_count as usize != set.vertex_count() || fit.pose_names != set.names {
+        anyhow::bail!(
+            "{} was not made from {}: its poses or vertex count differ",
+            args.fit.display(),
+            args.poses.display()
+        );
+    }
+    let params = SaliencyParams {
+        squared: args.squared,
+        percentile: args.percentile,
+        exclude: args.exclude.clone(),
+        floor: args.floor,
+    };
+    let template = set.template_mesh();
+    let key = stages::saliency::key(&params, poses_hash, fit_hash);
+    let (body, _, note): (SaliencyV1, _, _) = stages::saliency::compute(&params, &fit, template.diagonal())?;
+    let up = crate::pictures::parse_up_axis(args.up_axis.as_deref())?;
+    // Render before writing anything, so a failure leaves no partial output.
+    let png = match &args.png {
+        Some(_) => Some(crate::pictures::heatmap_png(
+            &template,
+            desal_viz::Scalar::PerVertex(&body.saliency),
+            up,
+            "deformation saliency",
+            "0-1",
+            Some((0.0, 1.0)),
+        )?),
+        None => None,
+    };
+    artifact::write_artifact(&args.output, &key.producer(&[]), &body)?;
+    if let (Some(path), Some(png)) = (&args.png, png) {
+        desal_io::write_atomic(path, &png)?;
+    }
+    if let Some(path) = &args.ply {
+        crate::pictures::write_scalar_ply(path, &template, "saliency", &body.saliency)?;
+    }
+    done(&note, &args.output);
+    Ok(())
+}

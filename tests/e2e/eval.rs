@@ -1,0 +1,1 @@
+//! `desal eval` end to end.
