@@ -274,6 +274,13 @@ pub fn read_artifact<T: ArtifactBody>(path: &Path) -> Result<(Producer, T, Conte
     decode_artifact(path, &bytes)
 }
 
+/// True when the file at `path` starts with the artifact magic (false when unreadable).
+pub fn is_artifact(path: &Path) -> bool {
+    use std::io::Read;
+    let mut magic = [0u8; 8];
+    std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut magic)).is_ok() && magic == MAGIC
+}
+
 /// Reads any artifact's header and producer (for `desal inspect`), checking the whole
 /// envelope.
 pub fn read_producer(path: &Path) -> Result<(ArtifactHeader, Producer), IoError> {

@@ -116,3 +116,48 @@ pub struct SaliencyV1 {
 impl ArtifactBody for SaliencyV1 {
     const KIND: ArtifactKind = ArtifactKind::Saliency;
 }
+
+/// Stage 3's result: the simplified template as the simplifier left it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SimplifiedV1 {
+    /// Positions in `simp_idx` order (f64: optimal placements are new points).
+    pub positions: Vec<[f64; 3]>,
+    pub faces: Vec<[u32; 3]>,
+    /// Per `simp_idx`, the `orig_idx` whose exact position it has (`None`: moved by
+    /// optimal placement).
+    pub simp_to_orig: Vec<Option<u32>>,
+    /// `optimal`, `subset` or `multipose`.
+    pub placement: String,
+    pub input_vertices: u32,
+    pub input_faces: u32,
+    pub collapses: u32,
+    /// `target` or `no-valid-collapse` (safeguards stopped it above the target).
+    pub stop: String,
+    pub max_error: f64,
+    pub mean_error: f64,
+    pub edge_length_mean: f64,
+    pub edge_length_variance: f64,
+}
+
+impl ArtifactBody for SimplifiedV1 {
+    const KIND: ArtifactKind = ArtifactKind::Simplified;
+}
+
+/// Stage 4's result: each simplified vertex's original vertex, and the simplified
+/// triangles (in `simp_idx` space). Applying it to a pose set is a gather.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MapV1 {
+    /// `simp_to_orig[simp_idx] = orig_idx`, all distinct.
+    pub simp_to_orig: Vec<u32>,
+    pub faces: Vec<[u32; 3]>,
+    /// `greedy` or `subset`.
+    pub mode: String,
+    /// Distance between the simplified template's positions and the mapped original
+    /// vertices (mesh units): mean and max.
+    pub displacement_mean: f64,
+    pub displacement_max: f64,
+}
+
+impl ArtifactBody for MapV1 {
+    const KIND: ArtifactKind = ArtifactKind::Map;
+}
