@@ -1,2 +1,24 @@
 //! Stage 3: saliency-weighted quadric edge collapse (paper §3.1, Eq. 3–5; Garland and
-//! Heckbert 1997).
+//! Heckbert 1997), and Mohr and Gleicher's multi-pose QEM (2003) for comparison.
+//!
+//! Entry points: [`simplify`] (one mesh, optional per-vertex weights and part labels)
+//! and [`simplify_multipose`] (a registered pose set). Both return a [`Simplified`]:
+//! the mesh in the `simp_idx` space, `simp_to_orig` (for each `simp_idx`, the
+//! `orig_idx` whose exact position it kept, if any) and a [`SimplifyReport`].
+//!
+//! The cost of collapsing edge `(v1, v2)` is `E = d · (w1 + w2)/2 · v̄ᵀ(Q1 + Q2)v̄`
+//! (Eq. 5), each factor switchable in [`SimplifyConfig`]: without saliency and balance
+//! it is plain QSlim. Safeguards (link condition, fold-over, degeneracy, frozen
+//! non-manifold input vertices) are always on; a target they prevent is reported in
+//! [`SimplifyReport::stop`], not raised as an error.
+
+mod collapse;
+mod config;
+mod error;
+pub mod quadric;
+mod report;
+
+pub use collapse::{Simplified, SimplifyInput, simplify, simplify_multipose, simplify_with_progress};
+pub use config::{PartBorders, Placement, SimplifyConfig, Target};
+pub use error::SimplifyError;
+pub use report::{Refusals, SimplifyReport, StopReason};
