@@ -135,11 +135,10 @@ pub struct Cache {
     root: PathBuf,
 }
 
-/// A cache entry found and verified.
+/// A cache entry found, with its envelope verified (magic, kind, version, length,
+/// checksum). The body is decoded later, only if something needs it.
 #[derive(Debug)]
-pub struct Hit<T> {
-    pub body: T,
-    pub producer: Producer,
+pub struct Hit {
     pub hash: ContentHash,
     pub summary: serde_json::Value,
 }
@@ -158,21 +157,19 @@ impl Cache {
         self.root.join(&key.stage).join(key.hash().to_hex())
     }
 
-    /// Looks up `key`. A corrupt entry is reported on stderr, removed, and treated as a
-    /// miss.
-    pub fn lookup<T: ArtifactBody>(&self, key: &StageKey) -> Option<Hit<T>> {
+    /// Looks up `key`, verifying the entry's envelope and checksum but not decoding its
+    /// body. A corrupt entry is reported on stderr, removed, and treated as a miss.
+    pub fn lookup<T: ArtifactBody>(&self, key: &StageKey) -> Option<Hit> {
         let dir = self.entry_dir(key);
         let path = dir.join("artifact.dsa");
-        if !path.exists() {
-            return None;
-        }
-        match artifact::read_artifact::<T>(&path) {
-            Ok((producer, body, hash)) => {
+        let bytes = fs::read(&path).ok()?;
+        match artifact::check_artifact::<T>(&path, &bytes) {
+            Ok(header) => {
                 let summary = fs::read(dir.join("summary.json"))
                     .ok()
                     .and_then(|b| serde_json::from_slice(&b).ok())
                     .unwrap_or(serde_json::Value::Null);
-                Some(Hit { body, producer, hash, summary })
+                Some(Hit { hash: header.checksum, summary })
             }
             Err(e) => {
                 eprintln!("warning: cache entry rejected, recomputing: {e}");

@@ -63,6 +63,28 @@ pub struct SaliencyArgs {
     pub up_axis: Option<String>,
 }
 
+/// `desal map`: stage 4 on a simplified template — desal's own artifact, or a PLY/OBJ
+/// made by another tool (MeshLab, CGAL, meshoptimizer), mapped by the same greedy rule.
+#[derive(Debug, clap::Args)]
+pub struct MapArgs {
+    /// Pose-set artifact (`poses.dsa`).
+    #[arg(long)]
+    pub poses: PathBuf,
+    /// Labels artifact (`labels.dsa`).
+    #[arg(long)]
+    pub labels: PathBuf,
+    /// The simplified template: `simplified.dsa`, or a mesh file (.ply, .obj).
+    #[arg(long)]
+    pub simplified: PathBuf,
+    /// Where to write the map artifact.
+    #[arg(long, short)]
+    pub output: PathBuf,
+    /// Also write the simplified pose set here (`<pose>.ply` per pose, `parts.txt`,
+    /// `vertex_map.txt`).
+    #[arg(long)]
+    pub out_dir: Option<PathBuf>,
+}
+
 fn read<T: ArtifactBody>(path: &Path) -> Result<(T, desal_io::ContentHash)> {
     let (_, body, hash) = artifact::read_artifact::<T>(path)?;
     Ok((body, hash))
@@ -129,6 +151,33 @@ pub fn saliency(args: &SaliencyArgs) -> Result<()> {
     }
     if let Some(path) = &args.ply {
         crate::pictures::write_scalar_ply(path, &template, "saliency", &body.saliency)?;
+    }
+    done(&note, &args.output);
+    Ok(())
+}
+
+pub fn map(args: &MapArgs) -> Result<()> {
+    let (poses, poses_hash) = read::<PoseSetV1>(&args.poses)?;
+    let (labels, _) = read::<LabelsV1>(&args.labels)?;
+    let set = poses.to_pose_set().with_context(|| format!("{}", args.poses.display()))?;
+    let labels = labels.to_labels().with_context(|| format!("{}", args.labels.display()))?;
+    let (simplified, simplified_hash) = if desal_io::artifact::is_artifact(&args.simplified) {
+        read::<desal_io::artifact::SimplifiedV1>(&args.simplified)?
+    } else {
+        // Another tool's mesh: every position is new as far as desal knows, so the
+        // greedy rule maps it, exactly as for optimal placement.
+        let bytes = std::fs::read(&args.simplified)
+            .with_context(|| format!("cannot read {}", args.simplified.display()))?;
+        let mesh = desal_io::read_mesh(&args.simplified)?;
+        (stages::simplify::external(&mesh), desal_io::ContentHash::of(&bytes))
+    };
+    let key = stages::map::key(poses_hash, simplified_hash);
+    let (body, _, note) = stages::map::compute(&simplified, &set, &labels)
+        .with_context(|| format!("mapping {} onto {}", args.simplified.display(), args.poses.display()))?;
+    let (simple_set, simple_labels) = stages::map::apply(&body, &set, &labels)?;
+    artifact::write_artifact(&args.output, &key.producer(&[]), &body)?;
+    if let Some(dir) = &args.out_dir {
+        stages::map::write_pose_set(dir, &body, &simple_set, &simple_labels)?;
     }
     done(&note, &args.output);
     Ok(())

@@ -55,6 +55,9 @@ enum Command {
     Fit(desal::cli::FitArgs),
     /// Stage 2 alone: deformation saliency from a fit.
     Saliency(desal::cli::SaliencyArgs),
+    /// Stage 4 alone: map a simplified template (desal's or another tool's) to original
+    /// vertices and apply it to every pose.
+    Map(desal::cli::MapArgs),
     /// Describe artifacts: kind, version, producer, inputs, summary figures.
     Inspect {
         #[arg(required = true)]
@@ -89,6 +92,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Fit(args) => desal::cli::fit(&args),
         Command::Saliency(args) => desal::cli::saliency(&args),
+        Command::Map(args) => desal::cli::map(&args),
         Command::Inspect { files } => {
             for file in files {
                 print!("{}", desal::inspect::describe(&file)?);

@@ -118,6 +118,10 @@ pub struct DatasetReport {
     pub stages: Vec<StageRecord>,
     pub seconds: f64,
     pub out_dir: PathBuf,
+    /// Identity of the output folder's content (see `outputs_key`).
+    pub outputs_key: String,
+    /// Every file the output folder holds besides report.json.
+    pub files: Vec<String>,
 }
 
 /// Runs a pipeline; returns one report per dataset run (in file order).
@@ -159,14 +163,27 @@ pub fn run(pipeline: &Pipeline, options: &RunOptions) -> Result<Vec<DatasetRepor
     Ok(reports)
 }
 
-/// A stage's output: the artifact body and where it came from.
+/// A stage's output: where its artifact is, its content hash and summary, and its body —
+/// decoded from the cache entry only when something asks for it, so a warm run that
+/// needs nothing recomputed decodes nothing.
 #[derive(Debug)]
 pub struct Staged<T> {
-    pub body: T,
+    body: std::cell::OnceCell<T>,
     pub hash: ContentHash,
     pub summary: serde_json::Value,
     /// The cache entry's artifact file (for copying into the output folder).
     pub artifact_path: PathBuf,
+}
+
+impl<T: ArtifactBody> Staged<T> {
+    /// The artifact body, decoded on first use.
+    pub fn body(&self) -> Result<&T> {
+        if let Some(body) = self.body.get() {
+            return Ok(body);
+        }
+        let (_, body, _) = desal_io::artifact::read_artifact::<T>(&self.artifact_path)?;
+        Ok(self.body.get_or_init(|| body))
+    }
 }
 
 /// Runs stages of one dataset against the cache, recording each.
@@ -203,7 +220,12 @@ impl StageRunner<'_> {
                 note,
             });
             self.cache.record(self.dataset, &key)?;
-            return Ok(Staged { body: hit.body, hash: hit.hash, summary: hit.summary, artifact_path: entry });
+            return Ok(Staged {
+                body: std::cell::OnceCell::new(),
+                hash: hit.hash,
+                summary: hit.summary,
+                artifact_path: entry,
+            });
         }
         let reason = if forced {
             "forced (--force or --from)".to_owned()
@@ -231,7 +253,7 @@ impl StageRunner<'_> {
             miss_reason: Some(reason),
             note,
         });
-        Ok(Staged { body, hash, summary, artifact_path: entry })
+        Ok(Staged { body: std::cell::OnceCell::from(body), hash, summary, artifact_path: entry })
     }
 }
 
@@ -245,20 +267,64 @@ fn run_dataset(
     let start = Instant::now();
     let progress: StepProgress = bars.for_dataset(&dataset.spec.name);
     let mut runner = StageRunner { cache, dataset: &dataset.spec.name, options, bars, records: Vec::new() };
-    let outputs = crate::stages::run_stages(dataset, &mut runner, &progress)?;
-    let out_dir =
-        options.out.as_ref().map_or_else(|| dataset.out_dir.clone(), |o| o.join(&dataset.spec.name));
-    let report = DatasetReport {
+    let stages = crate::stages::run_stages(dataset, &mut runner, &progress)?;
+    let out_dir = dataset.out_dir.clone();
+    let (input, output) = stages.counts();
+    let outputs_key = outputs_key(&runner.records, &dataset.spec);
+    let mut report = DatasetReport {
         dataset: dataset.spec.name.clone(),
         pipeline: pipeline.path.display().to_string(),
-        input: outputs.input.clone(),
-        output: outputs.output.clone(),
+        input,
+        output,
         stages: runner.records,
-        seconds: start.elapsed().as_secs_f64(),
+        seconds: 0.0,
         out_dir: out_dir.clone(),
+        outputs_key: outputs_key.clone(),
+        files: Vec::new(),
     };
+    // A warm run whose outputs are already in place only refreshes report.json.
+    if !options.force
+        && let Some(files) = outputs_in_place(&out_dir, &outputs_key)
+    {
+        report.files = files;
+        report.seconds = start.elapsed().as_secs_f64();
+        desal_io::write_json(&out_dir.join("report.json"), &report)?;
+        return Ok(report);
+    }
+    let outputs = stages.outputs(&dataset.spec)?;
+    report.files = outputs
+        .artifacts
+        .iter()
+        .map(|(name, _)| name.clone())
+        .chain(outputs.files.iter().map(|(name, _)| name.clone()))
+        .collect();
+    report.seconds = start.elapsed().as_secs_f64();
     write_outputs(&out_dir, outputs, &report)?;
     Ok(report)
+}
+
+/// Identifies a dataset's output folder content: every stage's cache key, plus what the
+/// derived files depend on beyond them (the picture's up axis, the desal version).
+fn outputs_key(records: &[StageRecord], spec: &crate::pipeline::DatasetToml) -> String {
+    let keys: Vec<&str> = records.iter().map(|r| r.cache_key.as_str()).collect();
+    let text = crate::pipeline::canonical_json(&serde_json::json!({
+        "stages": keys,
+        "up_axis": spec.up_axis,
+        "desal": env!("CARGO_PKG_VERSION"),
+    }));
+    ContentHash::of(text.as_bytes()).to_hex()
+}
+
+/// The output folder's file list when its report.json carries `outputs_key` and every
+/// listed file is present; `None` when the outputs must be written.
+fn outputs_in_place(out_dir: &Path, outputs_key: &str) -> Option<Vec<String>> {
+    let old: serde_json::Value = desal_io::atomic::read_json(&out_dir.join("report.json")).ok()?;
+    if old.get("outputs_key")?.as_str()? != outputs_key {
+        return None;
+    }
+    let files: Vec<String> =
+        old.get("files")?.as_array()?.iter().map(|f| f.as_str().map(str::to_owned)).collect::<Option<_>>()?;
+    files.iter().all(|f| out_dir.join(f).exists()).then_some(files)
 }
 
 /// Everything a dataset run leaves in its output folder.

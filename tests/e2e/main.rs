@@ -4,4 +4,5 @@ mod artifacts;
 mod cache;
 mod eval;
 mod ingest;
+mod stages;
 mod support;

@@ -248,6 +248,21 @@ pub fn check_envelope(path: &Path, bytes: &[u8]) -> Result<ArtifactHeader, IoErr
     Ok(ArtifactHeader { kind, version: u16_at(10), payload_len, checksum })
 }
 
+/// Checks that `bytes` hold a sound artifact of kind `T::KIND` in this build's version,
+/// without decoding the payload.
+pub fn check_artifact<T: ArtifactBody>(path: &Path, bytes: &[u8]) -> Result<ArtifactHeader, IoError> {
+    let header = check_envelope(path, bytes)?;
+    if header.kind != T::KIND {
+        return Err(IoError::WrongKind {
+            path: path.to_owned(),
+            expected: T::KIND.name(),
+            found: header.kind.name().into(),
+        });
+    }
+    check_version(path, &header)?;
+    Ok(header)
+}
+
 /// Decodes an artifact of kind `T::KIND` from `bytes`; returns the producer, the body and
 /// the content hash. `path` is for messages only.
 pub fn decode_artifact<T: ArtifactBody>(

@@ -1,0 +1,21 @@
+//! `desal-map`: stage 4 alone (greedy mapping + apply to every pose), on artifacts or on
+//! another tool's simplified mesh. Same as `desal map`.
+use clap::Parser;
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "desal-map",
+    version,
+    about = "Stage 4: map a simplified template to original vertices and apply it to every pose"
+)]
+struct Cli {
+    #[command(flatten)]
+    args: desal::cli::MapArgs,
+}
+
+fn main() -> std::process::ExitCode {
+    match desal::cli::map(&Cli::parse().args) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => desal::report_error(&e),
+    }
+}

@@ -1,0 +1,113 @@
+//! Stage 4 adapter: cache key, the call into `desal-map`, the artifact conversion, and
+//! the registered simplified pose set written to the output folder.
+
+use anyhow::{Result, bail};
+use desal_io::artifact::{ArtifactKind, ContentHash, MapV1, SimplifiedV1};
+use desal_map::{MapConfig, MapMode, VertexMap};
+use desal_mesh::{PartLabels, PoseSet};
+use serde_json::json;
+
+use crate::cache::StageKey;
+
+/// Version of stage 4 as the driver runs it.
+pub const VERSION: u32 = 1;
+
+pub fn key(poses: ContentHash, simplified: ContentHash) -> StageKey {
+    StageKey {
+        stage: "map".into(),
+        stage_version: VERSION,
+        format_version: ArtifactKind::Map.current_version(),
+        parameters: "{}".into(),
+        inputs: vec![("poses".into(), poses), ("simplified".into(), simplified)],
+    }
+}
+
+/// Maps the simplified template to original vertices: exactly, when every simplified
+/// vertex is an original one (subset placement); by the paper's greedy rule otherwise.
+pub fn compute(
+    simplified: &SimplifiedV1,
+    set: &PoseSet,
+    labels: &PartLabels,
+) -> Result<(MapV1, serde_json::Value, String)> {
+    let mesh = super::simplify::mesh(simplified);
+    let kept: Option<Vec<u32>> = simplified.simp_to_orig.iter().copied().collect();
+    let mode = match &kept {
+        Some(kept_orig) => MapMode::Subset { kept_orig },
+        None => MapMode::Greedy,
+    };
+    let out = desal_map::map_pose_set(&MapConfig::default(), mode, &mesh, set, labels)?;
+    let r = &out.report;
+    if !r.empty_parts.is_empty() {
+        let names: Vec<&str> = r.empty_parts.iter().map(|&p| labels.names[p as usize].as_str()).collect();
+        eprintln!(
+            "warning: no simplified vertex carries part(s) {}: the target is too coarse for them",
+            names.join(", ")
+        );
+    }
+    let note = r.to_string();
+    let summary = json!({
+        "mode": r.mode,
+        "original_vertices": r.original_vertices,
+        "simplified_vertices": r.simplified_vertices,
+        "simplified_faces": r.simplified_faces,
+        "poses": r.poses,
+        "displacement_mean": r.displacement.mean,
+        "displacement_max": r.displacement.max,
+        "empty_parts": r.empty_parts,
+        "map_seconds": r.map_seconds,
+        "apply_seconds": r.apply_seconds,
+    });
+    let body = MapV1 {
+        simp_to_orig: out.map.simp_to_orig.clone(),
+        faces: mesh.faces.clone(),
+        mode: r.mode.into(),
+        displacement_mean: r.displacement.mean,
+        displacement_max: r.displacement.max,
+    };
+    Ok((body, summary, note))
+}
+
+/// Every pose simplified by `map` (a gather), with the labels carried along.
+pub fn apply(map: &MapV1, set: &PoseSet, labels: &PartLabels) -> Result<(PoseSet, PartLabels)> {
+    let vertex_map = VertexMap::try_new(map.simp_to_orig.clone(), set.vertex_count())?;
+    if map.faces.iter().flatten().any(|&i| i as usize >= vertex_map.len()) {
+        bail!("the map's triangles reference vertices beyond its {} entries", vertex_map.len());
+    }
+    Ok(desal_map::apply_map(set, labels, &map.faces, &vertex_map)?)
+}
+
+/// `desal inspect` lines for a map artifact.
+pub fn describe(m: &MapV1, out: &mut String) {
+    use std::fmt::Write as _;
+    let _ = writeln!(
+        out,
+        "    {} map: {} simplified vertices, {} faces; displacement mean {:.3e} max {:.3e}",
+        m.mode,
+        m.simp_to_orig.len(),
+        m.faces.len(),
+        m.displacement_mean,
+        m.displacement_max
+    );
+}
+
+/// The simplified template of stage 3, for `simplified-template-raw.ply`.
+pub fn raw_template(simplified: &SimplifiedV1) -> desal_mesh::TriMesh {
+    super::simplify::mesh(simplified)
+}
+
+/// Writes a simplified pose set into `dir`: `<pose>.ply` per pose, `parts.txt`,
+/// `vertex_map.txt`.
+pub fn write_pose_set(dir: &std::path::Path, map: &MapV1, set: &PoseSet, labels: &PartLabels) -> Result<()> {
+    use desal_io::ply::{PlyWriteOptions, write_ply};
+    for pose in 0..set.pose_count() {
+        write_ply(
+            &dir.join(format!("{}.ply", set.names[pose])),
+            &set.pose_mesh(pose),
+            &PlyWriteOptions::default(),
+        )?;
+    }
+    desal_io::labels::write_labels_txt(&dir.join("parts.txt"), labels)?;
+    let text: String = map.simp_to_orig.iter().map(|i| format!("{i}\n")).collect();
+    desal_io::write_atomic(&dir.join("vertex_map.txt"), text.as_bytes())?;
+    Ok(())
+}
