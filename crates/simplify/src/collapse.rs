@@ -5,10 +5,9 @@
 //!
 //! The story, as [`run_engine`] tells it: classify every vertex and fill its quadric in
 //! one parallel pass; then, in passes until the target: list the live edges, cost them
-//! all in parallel, sort the cheap ones, and perform them in order, each re-checked
-//! against the safeguards (link condition, fold-over, degeneracy) and skipped when an
-//! endpoint already changed in this pass; finally compact the survivors into the
-//! output mesh.
+//! all in parallel, sort the cheap ones, choose in cost order those that share no
+//! endpoint, and perform them, each re-checked against the safeguards (link condition,
+//! fold-over, degeneracy); finally compact the survivors into the output mesh.
 //!
 //! Why passes and not a heap: the first version kept every edge in a binary heap with
 //! lazy invalidation (stamps per vertex); profiling on SCAPE showed the loop stalled on
@@ -194,23 +193,24 @@ fn run_engine(
     );
     let target = StopAt::new(config, engine.live_faces);
     progress.begin("collapse edges", target.remaining(&engine) as u64);
-    // A pass whose error limit let nothing through is retried without the limit;
-    // a pass without limit that performs nothing means no valid collapse is left.
-    let mut limited = true;
+    // A batched pass that achieves nothing (its cheapest choices were all refused) is
+    // followed by an exhaustive one, which tries every edge in cost order; when that
+    // achieves nothing either, no valid collapse is left.
+    let mut pass = Pass::Batched;
     while !target.reached(&engine) {
         let edges = engine.pick_edge_collapses();
-        let order = engine.rank_edge_collapses(&edges, target.remaining(&engine), limited);
+        let order = engine.rank_edge_collapses(&edges, target.remaining(&engine), pass == Pass::Batched);
         let before = engine.collapses;
-        engine.perform_edge_collapses(&edges, &order, &target);
-        progress.advance((engine.collapses - before) as u64);
-        if engine.collapses == before {
-            if !limited {
-                break;
-            }
-            limited = false;
-        } else {
-            limited = true;
+        match pass {
+            Pass::Batched => engine.perform_chosen_collapses(&edges, &order, &target),
+            Pass::Exhaustive => engine.perform_collapses_in_order(&edges, &order, &target),
         }
+        progress.advance((engine.collapses - before) as u64);
+        pass = match (engine.collapses > before, pass) {
+            (true, _) => Pass::Batched,
+            (false, Pass::Batched) => Pass::Exhaustive,
+            (false, Pass::Exhaustive) => break,
+        };
     }
     progress.finish();
     let stop = if target.reached(&engine) { StopReason::TargetReached } else { StopReason::NoValidCollapse };
@@ -251,6 +251,15 @@ fn check_input(
     Ok(())
 }
 
+/// How a pass performs its ranked collapses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Pass {
+    /// Cost-limited, chosen in cost order, performed in vertex order (fast).
+    Batched,
+    /// Every edge, performed in cost order (when a batched pass got stuck).
+    Exhaustive,
+}
+
 /// The stopping rule: a face count or a vertex count.
 #[derive(Debug)]
 enum StopAt {
@@ -276,7 +285,8 @@ impl StopAt {
 
     fn remaining(&self, engine: &Engine) -> usize {
         match *self {
-            StopAt::Faces(n) => engine.live_faces.saturating_sub(n) / 2,
+            // Most collapses remove two faces; rounding up reaches an odd gap.
+            StopAt::Faces(n) => engine.live_faces.saturating_sub(n).div_ceil(2),
             StopAt::Vertices(n) => engine.live_vertices.saturating_sub(n),
         }
     }
@@ -514,9 +524,50 @@ impl Engine {
         order.into_iter().map(|(_, i)| i).collect()
     }
 
-    /// Pass, step 3: perform the ranked collapses in order, skipping edges with an
-    /// endpoint already changed in this pass (its cost is stale), until the target.
-    fn perform_edge_collapses(&mut self, edges: &[[u32; 2]], order: &[u32], target: &StopAt) {
+    /// Pass, step 3: choose, in cost order, as many collapses as are still needed with
+    /// no endpoint shared (a shared endpoint would make the later cost stale), then
+    /// perform them in vertex order, each re-checked against the current mesh.
+    ///
+    /// Why two steps: performing in cost order jumps around the whole mesh; on a
+    /// million faces the loop then waits on memory at every step. The chosen set is the
+    /// same either way; only the order of mutually non-adjacent collapses changes, and
+    /// the safeguards see the mesh as it is when each one is performed.
+    fn perform_chosen_collapses(&mut self, edges: &[[u32; 2]], order: &[u32], target: &StopAt) {
+        self.pass += 1;
+        let wanted = target.remaining(self).max(1);
+        let mut chosen = Vec::with_capacity(wanted.min(order.len()));
+        for &i in order {
+            if chosen.len() == wanted {
+                break;
+            }
+            let [a, b] = edges[i as usize];
+            if self.changed_in_pass[a as usize] == self.pass || self.changed_in_pass[b as usize] == self.pass
+            {
+                continue;
+            }
+            self.changed_in_pass[a as usize] = self.pass;
+            self.changed_in_pass[b as usize] = self.pass;
+            chosen.push(i);
+        }
+        // Edge indices ascend with (lo, hi): vertex order.
+        chosen.sort_unstable();
+        for i in chosen {
+            if target.reached(self) {
+                break;
+            }
+            let [a, b] = edges[i as usize];
+            let Some(candidate) = self.evaluate(a, b) else { continue };
+            if let Err(refusal) = self.check_collapse(&candidate) {
+                self.count_refusal(refusal);
+                continue;
+            }
+            self.collapse_edge(&candidate);
+        }
+    }
+
+    /// Pass, step 3 when batched passes are stuck: perform the ranked collapses in cost
+    /// order, each checked as it comes, skipping edges with an endpoint already changed.
+    fn perform_collapses_in_order(&mut self, edges: &[[u32; 2]], order: &[u32], target: &StopAt) {
         self.pass += 1;
         for &i in order {
             if target.reached(self) {
