@@ -1,5 +1,5 @@
-//! Benchmarks of the driver's own work on the 71 SCAPE poses: ingest from PLY, and
-//! reloading the ingested artifact. Skips (with a message) without ../shared/datasets.
+//! Benchmarks of the driver on the 71 SCAPE poses: ingest from PLY, reloading the
+//! ingested artifact, and the whole pipeline cold and warm. Skips (with a message) without ../shared/datasets.
 //!
 //! Run: `cargo bench --bench pipeline`.
 
@@ -7,6 +7,8 @@ use std::path::{Path, PathBuf};
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use desal::ingest;
+use desal::progress::ProgressMode;
+use desal::run::RunOptions;
 use desal_io::artifact::{self, PoseSetV1, Producer};
 use desal_mesh::NoProgress;
 
@@ -52,5 +54,30 @@ fn bench_ingest(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_ingest);
+/// The whole SCAPE pipeline (ingest → fit → saliency → simplify → map, outputs
+/// written): cold (empty cache, every stage computed) and warm (all cache hits).
+fn bench_full_pipeline(c: &mut Criterion) {
+    if scape_files().is_none() {
+        return;
+    }
+    let pipeline_file = Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/scape.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = desal::pipeline::load(&pipeline_file, Some(dir.path())).unwrap();
+    let quiet = RunOptions { progress: ProgressMode::Quiet, ..RunOptions::default() };
+    let mut group = c.benchmark_group("scape-pipeline");
+    group.sample_size(10);
+    group.bench_function("cold (empty cache)", |b| {
+        b.iter(|| {
+            let _ = std::fs::remove_dir_all(dir.path());
+            desal::run::run(&pipeline, &quiet).unwrap()
+        });
+    });
+    desal::run::run(&pipeline, &quiet).unwrap();
+    group.bench_function("warm (all hits)", |b| {
+        b.iter(|| desal::run::run(&pipeline, &quiet).unwrap());
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench_ingest, bench_full_pipeline);
 criterion_main!(benches);
