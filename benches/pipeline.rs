@@ -54,6 +54,28 @@ fn bench_ingest(c: &mut Criterion) {
     group.finish();
 }
 
+/// Stages 1 and 2 alone on the 71 SCAPE poses (the target: together well under
+/// 100 ms on 2 cores).
+fn bench_fit_and_saliency(c: &mut Criterion) {
+    let Some(files) = scape_files() else { return };
+    let (set, _) = ingest::ingest_poses(&files, 0, false, &NoProgress).unwrap();
+    let labels_path = files[0].with_file_name("vertex_part_labels_16.txt");
+    let labels = ingest::ingest_labels(&labels_path, &set).unwrap();
+    let fit_params = desal::pipeline::FitParams::default();
+    let saliency_params = desal::pipeline::SaliencyParams::default();
+    let diagonal = set.template_mesh().diagonal();
+    let mut group = c.benchmark_group("scape-71");
+    group.sample_size(20);
+    group.bench_function("fit (stage 1)", |b| {
+        b.iter(|| desal::stages::fit::compute(&fit_params, &set, &labels, &NoProgress).unwrap());
+    });
+    let (fit, _, _) = desal::stages::fit::compute(&fit_params, &set, &labels, &NoProgress).unwrap();
+    group.bench_function("saliency (stage 2)", |b| {
+        b.iter(|| desal::stages::saliency::compute(&saliency_params, &fit, diagonal).unwrap());
+    });
+    group.finish();
+}
+
 /// The whole SCAPE pipeline (ingest → fit → saliency → simplify → map, outputs
 /// written): cold (empty cache, every stage computed) and warm (all cache hits).
 fn bench_full_pipeline(c: &mut Criterion) {
@@ -79,5 +101,5 @@ fn bench_full_pipeline(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_ingest, bench_full_pipeline);
+criterion_group!(benches, bench_ingest, bench_fit_and_saliency, bench_full_pipeline);
 criterion_main!(benches);
