@@ -85,6 +85,53 @@ pub struct MapArgs {
     pub out_dir: Option<PathBuf>,
 }
 
+/// `desal simplify`: stage 3 on a plain mesh, optionally weighted by saliency.
+#[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("target").required(true).args(["target_faces", "target_vertices", "ratio"])))]
+pub struct SimplifyArgs {
+    /// Input mesh (PLY or OBJ).
+    #[arg(long)]
+    pub input: PathBuf,
+    /// Output mesh (PLY), written atomically.
+    #[arg(long)]
+    pub output: PathBuf,
+    /// Stop at this many faces.
+    #[arg(long)]
+    pub target_faces: Option<usize>,
+    /// Stop at this many vertices.
+    #[arg(long)]
+    pub target_vertices: Option<usize>,
+    /// Keep this fraction of the faces, in (0, 1].
+    #[arg(long)]
+    pub ratio: Option<f64>,
+    /// Per-vertex saliency: a `saliency.dsa` artifact (its floored weights are used), a
+    /// PLY with a float vertex property `saliency`, or a text file with one number in
+    /// [0, 1] per line (`#` comments allowed). Enables the saliency factor of the cost.
+    #[arg(long)]
+    pub saliency: Option<PathBuf>,
+    /// Weight floor applied to saliency read from PLY or text (`w = floor + (1 - floor) s`),
+    /// or replacing an artifact's floor. Default: the artifact's, else 0.05.
+    #[arg(long)]
+    pub floor: Option<f64>,
+    /// Where a collapsed edge's vertex goes.
+    #[arg(long, value_enum, default_value_t = PlacementArg::Optimal)]
+    pub placement: PlacementArg,
+    /// Drop the edge-length ("balancing") factor of the cost, which is on when
+    /// `--saliency` is given (the paper's method) and off otherwise (plain QSlim).
+    #[arg(long)]
+    pub no_balance: bool,
+    /// Run the simplification this many times and print SIMPLIFY_SECONDS=<best>
+    /// (simplification alone, no I/O), for the peers' benchmark harness.
+    #[arg(long)]
+    pub repeat: Option<usize>,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum PlacementArg {
+    Optimal,
+    Subset,
+}
+
 fn read<T: ArtifactBody>(path: &Path) -> Result<(T, desal_io::ContentHash)> {
     let (_, body, hash) = artifact::read_artifact::<T>(path)?;
     Ok((body, hash))
@@ -181,4 +228,104 @@ pub fn map(args: &MapArgs) -> Result<()> {
     }
     done(&note, &args.output);
     Ok(())
+}
+
+pub fn simplify(args: &SimplifyArgs) -> Result<()> {
+    use desal_simplify::{Placement, SimplifyConfig, SimplifyInput, Target};
+    let mesh = desal_io::read_mesh(&args.input)?;
+    let weights = match &args.saliency {
+        Some(path) => Some(read_weights(path, args.floor, mesh.vertex_count())?),
+        None => None,
+    };
+    let target = match (args.target_faces, args.target_vertices, args.ratio) {
+        (Some(n), _, _) => Target::Faces(n),
+        (_, Some(n), _) => Target::Vertices(n),
+        (_, _, Some(r)) => Target::Ratio(r),
+        _ => anyhow::bail!("give one of --target-faces, --target-vertices, --ratio"),
+    };
+    let config = SimplifyConfig {
+        target,
+        placement: match args.placement {
+            PlacementArg::Optimal => Placement::Optimal,
+            PlacementArg::Subset => Placement::Subset,
+        },
+        saliency: weights.is_some(),
+        balance: weights.is_some() && !args.no_balance,
+        ..SimplifyConfig::default()
+    };
+    let mut input = SimplifyInput::new(&mesh);
+    if let Some(w) = &weights {
+        input = input.with_weights(w);
+    }
+    let mut best = f64::INFINITY;
+    let mut result = None;
+    for _ in 0..args.repeat.unwrap_or(1).max(1) {
+        let started = std::time::Instant::now();
+        let simplified = desal_simplify::simplify(&input, &config)
+            .with_context(|| format!("simplifying {}", args.input.display()))?;
+        best = best.min(started.elapsed().as_secs_f64());
+        result = Some(simplified);
+    }
+    let simplified = result.expect("at least one run");
+    desal_io::ply::write_ply(&args.output, &simplified.mesh, &desal_io::ply::PlyWriteOptions::default())?;
+    eprintln!("{}", simplified.report);
+    if args.repeat.is_some() {
+        println!("SIMPLIFY_SECONDS={best}");
+    }
+    Ok(())
+}
+
+/// Stage-3 weights from a saliency artifact, a PLY `saliency` property or a text file,
+/// one per vertex of the mesh being simplified.
+fn read_weights(path: &Path, floor: Option<f64>, vertex_count: usize) -> Result<Vec<f64>> {
+    let floor_of = |f: f64| -> Result<f64> {
+        anyhow::ensure!((0.0..=1.0).contains(&f), "--floor {f} is outside [0, 1]");
+        Ok(f)
+    };
+    let weights: Vec<f64> = if artifact::is_artifact(path) {
+        let (body, _) = read::<SaliencyV1>(path)?;
+        match floor {
+            None => body.weights,
+            Some(f) => {
+                let f = floor_of(f)?;
+                body.saliency.iter().map(|s| f + (1.0 - f) * s).collect()
+            }
+        }
+    } else {
+        let saliency = read_saliency_values(path)?;
+        let f = floor_of(floor.unwrap_or(desal_saliency::DEFAULT_WEIGHT_FLOOR))?;
+        if let Some((v, s)) = saliency.iter().enumerate().find(|(_, s)| !(0.0..=1.0).contains(*s)) {
+            anyhow::bail!("{}: saliency of vertex {v} is {s}, outside [0, 1]", path.display());
+        }
+        saliency.iter().map(|s| f + (1.0 - f) * s).collect()
+    };
+    anyhow::ensure!(
+        weights.len() == vertex_count,
+        "{}: {} saliency values for a mesh of {vertex_count} vertices",
+        path.display(),
+        weights.len()
+    );
+    Ok(weights)
+}
+
+/// Saliency values from a PLY's `saliency` vertex property or a text file with one
+/// number per line.
+fn read_saliency_values(path: &Path) -> Result<Vec<f64>> {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
+        let ply = desal_io::ply::read_ply_full(path)?;
+        let (_, values) = ply.scalars.iter().find(|(name, _)| name == "saliency").with_context(|| {
+            format!("{}: the PLY has no float vertex property `saliency`", path.display())
+        })?;
+        return Ok(values.iter().map(|&x| x as f64).collect());
+    }
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    text.lines()
+        .enumerate()
+        .map(|(i, line)| (i, line.trim()))
+        .filter(|(_, line)| !line.is_empty() && !line.starts_with('#'))
+        .map(|(i, line)| {
+            line.parse::<f64>()
+                .with_context(|| format!("{}:{}: `{line}` is not a number", path.display(), i + 1))
+        })
+        .collect()
 }

@@ -55,6 +55,8 @@ enum Command {
     Fit(desal::cli::FitArgs),
     /// Stage 2 alone: deformation saliency from a fit.
     Saliency(desal::cli::SaliencyArgs),
+    /// Stage 3 alone: simplify a mesh file, optionally weighted by saliency.
+    Simplify(desal::cli::SimplifyArgs),
     /// Stage 4 alone: map a simplified template (desal's or another tool's) to original
     /// vertices and apply it to every pose.
     Map(desal::cli::MapArgs),
@@ -92,6 +94,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Fit(args) => desal::cli::fit(&args),
         Command::Saliency(args) => desal::cli::saliency(&args),
+        Command::Simplify(args) => desal::cli::simplify(&args),
         Command::Map(args) => desal::cli::map(&args),
         Command::Inspect { files } => {
             for file in files {

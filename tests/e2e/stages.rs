@@ -152,3 +152,40 @@ fn another_tools_mesh_is_mapped_by_the_greedy_rule() {
     );
     assert!(target.join("p3.ply").exists());
 }
+
+#[test]
+fn simplify_binary_takes_plain_files_and_refuses_a_saliency_of_the_wrong_length() {
+    let dir = tempfile::tempdir().unwrap();
+    write_tube_dataset(dir.path(), "");
+    let input = dir.path().join("poses/p0.ply");
+    let output = dir.path().join("small.ply");
+    let saliency = dir.path().join("saliency.txt");
+    let values: Vec<String> = (0..122).map(|v| format!("{}", (v % 10) as f64 / 10.0)).collect();
+    std::fs::write(&saliency, values.join("\n")).unwrap();
+    let exe = Path::new(env!("CARGO_BIN_EXE_desal")).with_file_name("desal-simplify");
+    let args = |extra: &[&str]| {
+        let mut a = vec!["--input", input.to_str().unwrap(), "--output", output.to_str().unwrap()];
+        a.extend_from_slice(extra);
+        a.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+    };
+    let out = Command::new(&exe)
+        .args(args(&["--target-vertices", "40", "--saliency", saliency.to_str().unwrap(), "--repeat", "2"]))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("SIMPLIFY_SECONDS="));
+    assert_eq!(desal_io::read_mesh(&output).unwrap().vertex_count(), 40);
+    std::fs::remove_file(&output).unwrap();
+    std::fs::write(&saliency, values[..100].join("\n")).unwrap();
+    let out = Command::new(&exe)
+        .args(args(&["--target-vertices", "40", "--saliency", saliency.to_str().unwrap()]))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("saliency.txt") && err.contains("100 saliency values") && err.contains("122"),
+        "{err}"
+    );
+    assert!(!output.exists(), "no partial output");
+}
