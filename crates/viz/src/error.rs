@@ -21,6 +21,10 @@ pub enum VizError {
     #[error("view size {width} x {height} pixels is out of range (1..=8192 each)")]
     BadSize { width: u32, height: u32 },
 
+    /// A line plot has no point it can draw (all non-finite, or y ≤ 0 on a log axis).
+    #[error("nothing to plot: the {series} series have no finite point (y must be > 0 on a log axis)")]
+    EmptyPlot { series: usize },
+
     /// The PNG encoder failed (should not happen for an in-memory image).
     #[error("PNG encoding failed: {0}")]
     Png(String),

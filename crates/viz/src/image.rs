@@ -44,6 +44,55 @@ impl RgbaImage {
         }
     }
 
+    /// The rectangle of `width × height` pixels whose top-left corner is `(x, y)`,
+    /// clipped to the image (so the result may be smaller than asked).
+    pub fn crop(&self, x: u32, y: u32, width: u32, height: u32) -> Self {
+        let width = width.min(self.width.saturating_sub(x));
+        let height = height.min(self.height.saturating_sub(y));
+        let mut pixels = Vec::with_capacity(4 * width as usize * height as usize);
+        for row in y..y + height {
+            let start = self.offset(x, row);
+            pixels.extend_from_slice(&self.pixels[start..start + 4 * width as usize]);
+        }
+        Self { width, height, pixels }
+    }
+
+    /// Copies `other` into this image with its top-left corner at `(x, y)`, clipped.
+    pub fn paste(&mut self, other: &RgbaImage, x: i64, y: i64) {
+        for row in 0..other.height {
+            for col in 0..other.width {
+                self.put(x + col as i64, y + row as i64, other.get(col, row));
+            }
+        }
+    }
+
+    /// `images` side by side, left to right, top-aligned, on `background` (an empty
+    /// list gives a 0 × 0 image).
+    pub fn hstack(images: &[RgbaImage], background: [u8; 4]) -> Self {
+        let width = images.iter().map(|i| i.width).sum();
+        let height = images.iter().map(|i| i.height).max().unwrap_or(0);
+        let mut out = Self::filled(width, height, background);
+        let mut x = 0;
+        for image in images {
+            out.paste(image, x, 0);
+            x += image.width as i64;
+        }
+        out
+    }
+
+    /// `images` stacked top to bottom, left-aligned, on `background`.
+    pub fn vstack(images: &[RgbaImage], background: [u8; 4]) -> Self {
+        let width = images.iter().map(|i| i.width).max().unwrap_or(0);
+        let height = images.iter().map(|i| i.height).sum();
+        let mut out = Self::filled(width, height, background);
+        let mut y = 0;
+        for image in images {
+            out.paste(image, 0, y);
+            y += image.height as i64;
+        }
+        out
+    }
+
     fn offset(&self, x: u32, y: u32) -> usize {
         4 * (y as usize * self.width as usize + x as usize)
     }
@@ -64,6 +113,24 @@ pub fn encode_png(image: &RgbaImage) -> Result<Vec<u8>, VizError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A 2 × 1 and a 1 × 2 image side by side: 3 × 2, the short one padded with the
+    /// background; stacking puts the second below the first.
+    #[test]
+    fn stacking_and_cropping_keep_pixels_in_place() {
+        let (red, blue, white) = ([255, 0, 0, 255], [0, 0, 255, 255], [255; 4]);
+        let a = RgbaImage::filled(2, 1, red);
+        let b = RgbaImage::filled(1, 2, blue);
+        let row = RgbaImage::hstack(&[a.clone(), b.clone()], white);
+        assert_eq!((row.width, row.height), (3, 2));
+        assert_eq!([row.get(1, 0), row.get(2, 0), row.get(0, 1), row.get(2, 1)], [red, blue, white, blue]);
+        let column = RgbaImage::vstack(&[a, b], white);
+        assert_eq!((column.width, column.height), (2, 3));
+        assert_eq!([column.get(1, 0), column.get(0, 2), column.get(1, 2)], [red, blue, white]);
+        let corner = row.crop(1, 1, 5, 5);
+        assert_eq!((corner.width, corner.height), (2, 1), "clipped to the image");
+        assert_eq!([corner.get(0, 0), corner.get(1, 0)], [white, blue]);
+    }
 
     #[test]
     fn png_round_trips_through_the_decoder() {
