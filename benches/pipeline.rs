@@ -13,15 +13,7 @@ use desal_io::artifact::{self, PoseSetV1, Producer};
 use desal_mesh::NoProgress;
 
 fn scape_files() -> Option<Vec<PathBuf>> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/datasets/scape");
-    let Ok(entries) = std::fs::read_dir(&dir) else {
-        eprintln!("skipped: {} is absent", dir.display());
-        return None;
-    };
-    let mut files: Vec<PathBuf> =
-        entries.map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "ply")).collect();
-    files.sort();
-    Some(files)
+    desal_testdata::scape_dir().map(|dir| desal_testdata::scape_files(&dir))
 }
 
 fn bench_ingest(c: &mut Criterion) {

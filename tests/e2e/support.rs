@@ -7,23 +7,10 @@ use std::process::{Command, Output};
 use desal_io::ply::{PlyWriteOptions, write_ply};
 use desal_mesh::{TriMesh, Vec3};
 
-/// `../shared/datasets/<name>` when present; otherwise prints why the test is skipped
-/// and returns None. With `DESAL_REQUIRE_SHARED_DATA=1` (set by `.ci/run`) absence fails.
+/// `../shared/datasets/<name>`, or `None` after printing why the test skips (a failure
+/// instead under `.ci/run`); see `desal-testdata`.
 pub fn shared_dataset(name: &str) -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/datasets").join(name);
-    if dir.is_dir() {
-        return Some(dir);
-    }
-    assert!(
-        std::env::var_os("DESAL_REQUIRE_SHARED_DATA").is_none(),
-        "{} is missing but DESAL_REQUIRE_SHARED_DATA is set",
-        dir.display()
-    );
-    eprintln!(
-        "skipped: {} is absent (it sits beside the checkout only in CI and development)",
-        dir.display()
-    );
-    None
+    desal_testdata::shared_dataset(name)
 }
 
 /// A closed tube along +y: `rings` rings of `segments` vertices plus two cap centres.

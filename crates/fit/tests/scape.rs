@@ -3,32 +3,13 @@
 //! Kabsch fit, the mean per-vertex residual over the 70 non-template poses is about
 //! 14.5 mm. Skipped, with a printed reason, when the dataset is absent.
 
-use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use desal_fit::{FitConfig, FitModel, fit_pose_set};
 use desal_mesh::{NoProgress, PartLabels, PoseSet};
 
-const SCAPE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/datasets/scape");
-
 fn load_scape() -> Option<(PoseSet, PartLabels)> {
-    let dir = Path::new(SCAPE);
-    if !dir.is_dir() {
-        eprintln!("skipped: SCAPE dataset not found at {}", dir.display());
-        return None;
-    }
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "ply"))
-        .collect();
-    files.sort();
-    let meshes: Vec<_> = files.iter().map(|f| desal_io::read_mesh(f).unwrap()).collect();
-    let names = files.iter().map(|f| f.file_stem().unwrap().to_string_lossy().into_owned()).collect();
-    let faces = meshes[0].faces.clone();
-    let poses = PoseSet::try_new(names, meshes.into_iter().map(|m| m.positions).collect(), faces, 0).unwrap();
-    let labels = desal_io::labels::read_labels(&dir.join("vertex_part_labels_16.txt")).unwrap();
-    Some((poses, labels))
+    desal_testdata::scape()
 }
 
 #[test]

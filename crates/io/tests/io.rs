@@ -1,6 +1,6 @@
 //! Round trips and refusals of every format desal-io reads and writes.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use desal_io::artifact::{self, LabelsV1, PoseSetV1, Producer};
 use desal_io::ply::{PlyEncoding, PlyWriteOptions, read_ply_full, write_ply};
@@ -8,21 +8,7 @@ use desal_io::{IoError, read_mesh};
 use desal_mesh::{PartLabels, PoseSet, TriMesh, Vec3};
 
 fn scape_dir() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/datasets/scape");
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        assert!(
-            std::env::var_os("DESAL_REQUIRE_SHARED_DATA").is_none(),
-            "{} is missing in CI",
-            dir.display()
-        );
-        eprintln!(
-            "skipped: {} is absent (SCAPE is only available beside the checkout, e.g. in CI)",
-            dir.display()
-        );
-        None
-    }
+    desal_testdata::scape_dir()
 }
 
 fn tetra() -> TriMesh {

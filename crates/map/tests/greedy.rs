@@ -210,12 +210,8 @@ fn errors_on_bad_input() {
 /// The mapping on the real SCAPE template: every 5th vertex, perturbed, onto all 12500.
 #[test]
 fn scape_template_decimation_fast_equals_brute_force() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/datasets/scape");
-    let path = std::path::Path::new(dir).join("mesh000.ply");
-    if !path.exists() {
-        eprintln!("skipped: {} not found", path.display());
-        return;
-    }
+    let Some(dir) = desal_testdata::scape_dir() else { return };
+    let path = dir.join("mesh000.ply");
     let template = desal_io::read_mesh(&path).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(6);
     let simplified: Vec<Vec3> = template

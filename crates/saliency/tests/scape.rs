@@ -3,15 +3,12 @@
 //! head or hands, which move rigidly (the paper's Fig. 1). Skipped, with a printed
 //! reason, when the dataset is absent.
 
-use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use desal_fit::{FitConfig, FitResult, fit_pose_set};
 use desal_mesh::math::Real;
 use desal_mesh::{EdgeTopology, NoProgress, PartLabels, PoseSet};
 use desal_saliency::{Normalisation, ResidualTable, SaliencyConfig, compute_saliency};
-
-const SCAPE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/datasets/scape");
 
 // SCAPE part ids (`vertex_part_labels_16.txt`).
 const LEFT_HAND: u32 = 0;
@@ -23,23 +20,7 @@ const RIGHT_UPPER_LEG: u32 = 11;
 const HEAD: u32 = 12;
 
 fn load_scape() -> Option<(PoseSet, PartLabels)> {
-    let dir = Path::new(SCAPE);
-    if !dir.is_dir() {
-        eprintln!("skipped: SCAPE dataset not found at {}", dir.display());
-        return None;
-    }
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "ply"))
-        .collect();
-    files.sort();
-    let meshes: Vec<_> = files.iter().map(|f| desal_io::read_mesh(f).unwrap()).collect();
-    let names = files.iter().map(|f| f.file_stem().unwrap().to_string_lossy().into_owned()).collect();
-    let faces = meshes[0].faces.clone();
-    let poses = PoseSet::try_new(names, meshes.into_iter().map(|m| m.positions).collect(), faces, 0).unwrap();
-    let labels = desal_io::labels::read_labels(&dir.join("vertex_part_labels_16.txt")).unwrap();
-    Some((poses, labels))
+    desal_testdata::scape()
 }
 
 /// Vertices within `rings` edge hops of a part border (a vertex with a neighbour in

@@ -133,13 +133,7 @@ impl Tube {
 /// The SCAPE folder, or `None` (with a printed reason) when this clone has no
 /// `../shared` next to it.
 pub fn scape_dir() -> Option<PathBuf> {
-    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/datasets/scape")).to_path_buf();
-    if dir.join("mesh000.ply").exists() {
-        Some(dir)
-    } else {
-        eprintln!("skipped: SCAPE not found at {}", dir.display());
-        None
-    }
+    desal_testdata::scape_dir()
 }
 
 /// All SCAPE poses (mesh000 is the template) and the 16-part labels.
