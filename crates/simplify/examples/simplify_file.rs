@@ -1,6 +1,7 @@
 //! Measurement driver for the peers' harness while the `desal-simplify` binary is not
 //! wired into the root package: same flags (`--input --output --target-faces N
-//! [--target-vertices N] [--ratio R] [--placement optimal|subset] [--repeat R]`, plus
+//! [--target-vertices N] [--ratio R] [--placement optimal|subset] [--metric quadric|lt]
+//! [--repeat R]`, plus
 //! `--max-rotation DEG --max-distance K` for tuning), prints
 //! the one-line report to stderr and `SIMPLIFY_SECONDS=<best>` (simplification alone).
 //! Run: `cargo run --release -p desal-simplify --example simplify_file -- --input ...`.
@@ -9,7 +10,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use desal_io::ply::{PlyWriteOptions, write_ply};
-use desal_simplify::{Placement, SimplifyConfig, SimplifyInput, Target, simplify};
+use desal_simplify::{Metric, Placement, SimplifyConfig, SimplifyInput, Target, simplify};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -30,6 +31,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeat: usize = value("--repeat").map_or(Ok(1), |r| r.parse())?;
     let mesh = desal_io::read_mesh(&input)?;
     let mut config = SimplifyConfig { placement, ..SimplifyConfig::qslim(target) };
+    match value("--metric").as_deref() {
+        None | Some("quadric") => {}
+        Some("lt") => config.metric = Metric::LindstromTurk,
+        Some(other) => return Err(format!("--metric {other}: use quadric or lt").into()),
+    }
     if let Some(x) = value("--max-rotation") {
         config.max_normal_rotation_deg = x.parse()?;
     }

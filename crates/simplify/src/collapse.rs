@@ -31,8 +31,9 @@ use std::time::Instant;
 use desal_mesh::{Progress, TriMesh, Vec3, VertexFaces};
 use rayon::prelude::*;
 
-use crate::config::{PartBorders, Placement, SimplifyConfig, Target};
+use crate::config::{Metric, PartBorders, Placement, SimplifyConfig, Target};
 use crate::error::SimplifyError;
+use crate::lindstrom_turk::Neighbourhood;
 use crate::quadric::Quadric;
 use crate::report::{Refusals, SimplifyReport, StopReason, edge_length_stats};
 
@@ -319,6 +320,8 @@ struct Params {
     balance: bool,
     cos_max_rotation: f64,
     max_placement_distance: f64,
+    /// Rank and place by Lindstrom–Turk's memoryless cost (single pose only).
+    lindstrom_turk: bool,
 }
 
 /// All mutable state of one simplification (see the module doc for the layout).
@@ -437,6 +440,7 @@ impl Engine {
                 balance: config.balance,
                 cos_max_rotation: config.max_normal_rotation_deg.to_radians().cos(),
                 max_placement_distance: config.max_placement_distance,
+                lindstrom_turk: config.metric == Metric::LindstromTurk && pose_count == 1,
             },
             pose_count,
             center,
@@ -597,6 +601,9 @@ impl Engine {
             return None;
         }
         let (pinned_a, pinned_b) = (fa & PINNED != 0, fb & PINNED != 0);
+        if self.params.lindstrom_turk {
+            return self.evaluate_lindstrom_turk(a, b, pinned_a, pinned_b);
+        }
         let mut c = if self.params.subset {
             self.place_on_endpoint(a, b, pinned_a, pinned_b)
         } else if pinned_a || pinned_b {
@@ -607,14 +614,114 @@ impl Engine {
         };
         let pa = &self.positions[a as usize];
         let pb = &self.positions[b as usize];
-        c.cost = c.error;
+        c.cost = self.cost_factors(a, b, c.error, pa, pb);
+        c.cost.is_finite().then_some(c)
+    }
+
+    /// `error` times the enabled factors of Eq. 5: edge length, mean saliency weight.
+    #[inline]
+    fn cost_factors(&self, a: u32, b: u32, error: f64, pa: &Vec3, pb: &Vec3) -> f64 {
+        let mut cost = error;
         if self.params.balance {
-            c.cost *= (pa - pb).norm();
+            cost *= (pa - pb).norm();
         }
         if let Some(w) = &self.weights {
-            c.cost *= 0.5 * (w[a as usize] + w[b as usize]);
+            cost *= 0.5 * (w[a as usize] + w[b as usize]);
         }
+        cost
+    }
+
+    /// [`Self::evaluate`] with Lindstrom–Turk's cost: the placement of
+    /// [`Neighbourhood::placement`] (or the cheaper endpoint: for subset placement, for a
+    /// pinned endpoint, or when that placement is undefined or flies farther than
+    /// `max_placement_distance`), costed from the current faces around the edge. The
+    /// candidate's `error` stays the merged quadric's, for the report.
+    fn evaluate_lindstrom_turk(&self, a: u32, b: u32, pinned_a: bool, pinned_b: bool) -> Option<Candidate> {
+        let pa = self.positions[a as usize];
+        let pb = self.positions[b as usize];
+        let squared_length = (pa - pb).norm_squared();
+        let n = self.lindstrom_turk_neighbourhood(a, b);
+        let computed = if self.params.subset || pinned_a || pinned_b {
+            None
+        } else {
+            let mid = (pa + pb) * 0.5;
+            let reach = self.params.max_placement_distance * squared_length.sqrt();
+            n.placement(squared_length, || self.link_positions(a, b)).filter(|p| (p - mid).norm() <= reach)
+        };
+        let (position, keep) = match computed {
+            Some(p) => {
+                let (da, db) = ((p - pa).norm_squared(), (p - pb).norm_squared());
+                (p, if da < db || (da == db && a < b) { a } else { b })
+            }
+            None => {
+                let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+                let keep = if pinned_a {
+                    a
+                } else if pinned_b {
+                    b
+                } else if n.cost(&self.positions[hi as usize], squared_length)
+                    < n.cost(&self.positions[lo as usize], squared_length)
+                {
+                    hi
+                } else {
+                    lo
+                };
+                (self.positions[keep as usize], keep)
+            }
+        };
+        let mut c = self.candidate_at(a, b, position, keep);
+        c.cost = self.cost_factors(a, b, n.cost(&position, squared_length), &pa, &pb);
         c.cost.is_finite().then_some(c)
+    }
+
+    /// The faces incident to `a` or `b` (each once) and the boundary edges at either.
+    fn lindstrom_turk_neighbourhood(&self, a: u32, b: u32) -> Neighbourhood {
+        let mut n = Neighbourhood::default();
+        let p = |v: u32| &self.positions[v as usize];
+        for (v, other) in [(a, b), (b, a)] {
+            for &f in self.faces_of(v) {
+                let face = self.faces[f as usize];
+                // Faces on the edge are in both lists: count them with `a`.
+                if v == b && face.contains(&other) {
+                    continue;
+                }
+                n.add_triangle(p(face[0]), p(face[1]), p(face[2]));
+            }
+        }
+        for (v, other) in [(a, b), (b, a)] {
+            if self.flags[v as usize] & BOUNDARY == 0 {
+                continue;
+            }
+            for &f in self.faces_of(v) {
+                let face = self.faces[f as usize];
+                let i = face.iter().position(|&x| x == v).expect("face of v");
+                for (s, t) in [(face[i], face[(i + 1) % 3]), (face[(i + 2) % 3], face[i])] {
+                    let x = if s == v { t } else { s };
+                    if v == b && x == other {
+                        continue;
+                    }
+                    let sharing =
+                        self.faces_of(v).iter().filter(|&&g| self.faces[g as usize].contains(&x)).count();
+                    if sharing == 1 {
+                        n.add_boundary_edge(p(s), p(t));
+                    }
+                }
+            }
+        }
+        n
+    }
+
+    /// Positions of the vertices adjacent to `a` or `b`, other than `a` and `b`, in
+    /// index order.
+    fn link_positions(&self, a: u32, b: u32) -> Vec<Vec3> {
+        let mut link: Vec<u32> = [a, b]
+            .iter()
+            .flat_map(|&v| self.faces_of(v).iter().flat_map(|&f| self.faces[f as usize]))
+            .filter(|&x| x != a && x != b)
+            .collect();
+        link.sort_unstable();
+        link.dedup();
+        link.iter().map(|&x| self.positions[x as usize]).collect()
     }
 
     /// Subset placement: keep whichever endpoint has the smaller merged error (the lower

@@ -29,6 +29,29 @@ pub enum Placement {
     Subset,
 }
 
+/// Which error the collapse order and the optimal placement minimise.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Metric {
+    /// Garland–Heckbert: each vertex carries the quadric of its input faces, summed on
+    /// every collapse, so the error is measured against the *input* surface (the paper's
+    /// `Q`, Eq. 3–5).
+    #[default]
+    Quadric,
+    /// Lindstrom and Turk 1998/1999 ("Fast and memory efficient polygonal
+    /// simplification"; "Evaluation of memoryless simplification"), as in CGAL's default
+    /// policy: memoryless — the cost of collapsing `(v1, v2)` to `v` is computed from the
+    /// *current* faces around the edge: `½ Σ vol(v, t)² + ½ |v1 − v2|² Σ area(v, e)²`
+    /// over the faces `t` around the edge (the tetrahedra the collapse sweeps) and the
+    /// boundary edges `e` at its endpoints. Optimal placement preserves the enclosed
+    /// volume and the boundary's area vector exactly, then minimises that cost, then
+    /// (in directions still free) the squared distances to the link vertices, each
+    /// constraint kept only when at least 1° from the span of the earlier ones. Its
+    /// volume preservation keeps thin parts (fingers) from thinning out. The saliency and
+    /// balance factors of Eq. 5 multiply it as they multiply the quadric error.
+    /// [`crate::simplify_multipose`] always uses [`Metric::Quadric`].
+    LindstromTurk,
+}
+
 /// What to do along the borders between body parts (edges whose endpoints carry
 /// different part labels), when part labels are given.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -77,6 +100,9 @@ pub struct SimplifyConfig {
     /// distrusted (near-singular quadric) and replaced by the best point on the edge.
     /// Default: 2.
     pub max_placement_distance: f64,
+    /// The error ranking collapses and choosing optimal placements. Default:
+    /// [`Metric::Quadric`] (the paper's). The report's errors are always quadric errors.
+    pub metric: Metric,
 }
 
 impl Default for SimplifyConfig {
@@ -90,6 +116,7 @@ impl Default for SimplifyConfig {
             part_borders: PartBorders::Ignore,
             max_normal_rotation_deg: 60.0,
             max_placement_distance: 2.0,
+            metric: Metric::Quadric,
         }
     }
 }

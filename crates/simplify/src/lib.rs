@@ -15,10 +15,11 @@
 mod collapse;
 mod config;
 mod error;
+mod lindstrom_turk;
 pub mod quadric;
 mod report;
 
 pub use collapse::{Simplified, SimplifyInput, simplify, simplify_multipose, simplify_with_progress};
-pub use config::{PartBorders, Placement, SimplifyConfig, Target};
+pub use config::{Metric, PartBorders, Placement, SimplifyConfig, Target};
 pub use error::SimplifyError;
 pub use report::{Refusals, SimplifyReport, StopReason};

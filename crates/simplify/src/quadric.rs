@@ -73,6 +73,73 @@ impl Quadric {
         Self::from_plane(&n, -n.dot(p0), weight * edge.norm_squared(), 0.0)
     }
 
+    /// `|d × (x − t)|²`: `|d|²` times the squared distance from `x` to the line through
+    /// `t` along `d` (Lindstrom–Turk: four times the squared area of triangle
+    /// `(x, t − d, t)`). Carries no area.
+    #[inline]
+    pub(crate) fn from_line(t: &Vec3, d: &Vec3) -> Self {
+        let l = d.norm_squared();
+        let mut q = Self {
+            a00: l - d.x * d.x,
+            a01: -d.x * d.y,
+            a02: -d.x * d.z,
+            a11: l - d.y * d.y,
+            a12: -d.y * d.z,
+            a22: l - d.z * d.z,
+            ..Self::default()
+        };
+        let at = q.apply(t);
+        (q.b0, q.b1, q.b2) = (-at.x, -at.y, -at.z);
+        q.c = t.dot(&at);
+        q
+    }
+
+    /// `|x − p|²`, the squared distance to one point. Carries no area.
+    #[inline]
+    pub(crate) fn from_point(p: &Vec3) -> Self {
+        Self {
+            a00: 1.0,
+            a11: 1.0,
+            a22: 1.0,
+            b0: -p.x,
+            b1: -p.y,
+            b2: -p.z,
+            c: p.norm_squared(),
+            ..Self::default()
+        }
+    }
+
+    /// The quadric times `w` (area included).
+    #[inline]
+    pub(crate) fn scaled(&self, w: f64) -> Self {
+        Self {
+            a00: self.a00 * w,
+            a01: self.a01 * w,
+            a02: self.a02 * w,
+            a11: self.a11 * w,
+            a12: self.a12 * w,
+            a22: self.a22 * w,
+            b0: self.b0 * w,
+            b1: self.b1 * w,
+            b2: self.b2 * w,
+            c: self.c * w,
+            area: self.area * w,
+        }
+    }
+
+    /// The rows of `A` and the vector `b`: the minimiser solves `A x = −b`.
+    #[inline]
+    pub(crate) fn gradient_parts(&self) -> ([Vec3; 3], Vec3) {
+        (
+            [
+                Vec3::new(self.a00, self.a01, self.a02),
+                Vec3::new(self.a01, self.a11, self.a12),
+                Vec3::new(self.a02, self.a12, self.a22),
+            ],
+            Vec3::new(self.b0, self.b1, self.b2),
+        )
+    }
+
     /// `xᵀAx + 2bᵀx + c`: the weighted sum of squared distances to the planes.
     #[inline]
     pub fn eval(&self, p: &Vec3) -> f64 {
@@ -196,6 +263,17 @@ mod tests {
         assert!((p - Vec3::new(0.5, 0.0, 0.0)).norm() < 1e-12);
         // A segment inside the plane: Q is flat along it.
         assert!(q.minimiser_on_segment(&Vec3::zeros(), &Vec3::x()).is_none());
+    }
+
+    /// The line quadric is |d|² times the squared distance to the line; the point
+    /// quadric the squared distance to the point.
+    #[test]
+    fn line_and_point_quadrics_measure_squared_distances() {
+        let q = Quadric::from_line(&Vec3::new(0.0, 1.0, 0.0), &Vec3::new(2.0, 0.0, 0.0));
+        // (7, 4, 5) is at distance² 3² + 5² = 34 from the line y = 1, z = 0.
+        assert!((q.eval(&Vec3::new(7.0, 4.0, 5.0)) - 4.0 * 34.0).abs() < 1e-9);
+        let p = Quadric::from_point(&Vec3::new(1.0, 2.0, 3.0)).scaled(2.0);
+        assert!((p.eval(&Vec3::new(2.0, 2.0, 1.0)) - 10.0).abs() < 1e-12);
     }
 
     /// The boundary constraint of edge (0,0,0)-(1,0,0) on a face in the z = 0 plane is

@@ -3,8 +3,8 @@
 
 use desal_mesh::{EdgeTopology, PoseSet, TriMesh, Vec3};
 use desal_simplify::{
-    PartBorders, Placement, Simplified, SimplifyConfig, SimplifyError, SimplifyInput, StopReason, Target,
-    simplify, simplify_multipose,
+    Metric, PartBorders, Placement, Simplified, SimplifyConfig, SimplifyError, SimplifyInput, StopReason,
+    Target, simplify, simplify_multipose,
 };
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
@@ -400,6 +400,10 @@ fn placement_strategy() -> impl Strategy<Value = Placement> {
     prop_oneof![Just(Placement::Optimal), Just(Placement::Subset)]
 }
 
+fn metric_strategy() -> impl Strategy<Value = Metric> {
+    prop_oneof![Just(Metric::Quadric), Just(Metric::LindstromTurk)]
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
 
@@ -409,24 +413,54 @@ proptest! {
     /// the noise, not the simplifier.)
     #[test]
     fn closed_meshes_stay_clean(n in 3usize..8, noise in 0.0..0.06f64, seed in 0u64..1000,
-                                keep in 0.05..0.8f64, placement in placement_strategy(), balance: bool) {
+                                keep in 0.05..0.8f64, placement in placement_strategy(), balance: bool,
+                                metric in metric_strategy()) {
         let mesh = blob(n, noise, seed);
         let target = ((mesh.faces.len() as f64) * keep) as usize;
-        let config = SimplifyConfig { placement, balance, ..SimplifyConfig::qslim(Target::Faces(target)) };
+        let config =
+            SimplifyConfig { placement, balance, metric, ..SimplifyConfig::qslim(Target::Faces(target)) };
         check_properties(&mesh, &config);
     }
 
     /// Open noisy height fields with a boundary: same properties, normals stay up.
     #[test]
     fn open_meshes_stay_clean(n in 3usize..14, amplitude in 0.0..0.4f64, seed in 0u64..1000,
-                              keep in 0.02..0.8f64, placement in placement_strategy()) {
+                              keep in 0.02..0.8f64, placement in placement_strategy(),
+                              metric in metric_strategy()) {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let heights: Vec<f64> = (0..(n + 1) * (n + 1)).map(|_| amplitude * rng.gen_range(-1.0..1.0)).collect();
         let mesh = grid(n, |i, j| heights[j * (n + 1) + i]);
         let target = ((mesh.faces.len() as f64) * keep) as usize;
-        let config = SimplifyConfig { placement, ..SimplifyConfig::qslim(Target::Faces(target)) };
+        let config = SimplifyConfig { placement, metric, ..SimplifyConfig::qslim(Target::Faces(target)) };
         check_properties(&mesh, &config);
     }
+}
+
+/// Signed volume enclosed by a closed mesh (divergence theorem).
+fn enclosed_volume(mesh: &TriMesh) -> f64 {
+    (0..mesh.faces.len())
+        .map(|f| {
+            let [a, b, c] = mesh.corners(f);
+            a.dot(&b.cross(&c)) / 6.0
+        })
+        .sum()
+}
+
+/// Lindstrom–Turk's optimal placement keeps the swept volume of every collapse at
+/// zero, so a closed blob keeps its volume to rounding while the quadric metric (which
+/// does not try to) changes it by orders of magnitude more.
+#[test]
+fn lindstrom_turk_preserves_enclosed_volume() {
+    let mesh = blob(6, 0.05, 7);
+    let before = enclosed_volume(&mesh);
+    let target = Target::Faces(mesh.faces.len() / 5);
+    let lt = run(&mesh, &SimplifyConfig { metric: Metric::LindstromTurk, ..SimplifyConfig::qslim(target) });
+    let qem = run(&mesh, &SimplifyConfig::qslim(target));
+    assert_eq!(lt.report.stop, StopReason::TargetReached);
+    let lt_change = (enclosed_volume(&lt.mesh) - before).abs() / before;
+    let qem_change = (enclosed_volume(&qem.mesh) - before).abs() / before;
+    assert!(lt_change < 1e-9, "LT changed the volume by {lt_change:e}");
+    assert!(qem_change > 1e3 * lt_change.max(1e-12), "QEM changed it by only {qem_change:e}");
 }
 
 // ---------------------------------------------------------------------------------
@@ -444,8 +478,11 @@ fn scape_template_with_pinched_vertex_simplifies() {
         return;
     }
     let mesh = desal_io::read_mesh(&path).expect("SCAPE template reads");
-    for placement in [Placement::Optimal, Placement::Subset] {
-        let config = SimplifyConfig { placement, ..SimplifyConfig::qslim(Target::Vertices(2500)) };
+    let runs = [Placement::Optimal, Placement::Subset]
+        .into_iter()
+        .flat_map(|placement| [Metric::Quadric, Metric::LindstromTurk].map(|metric| (placement, metric)));
+    for (placement, metric) in runs {
+        let config = SimplifyConfig { placement, metric, ..SimplifyConfig::qslim(Target::Vertices(2500)) };
         let out = run(&mesh, &config);
         assert_eq!(out.report.stop, StopReason::TargetReached, "{}", out.report);
         assert_eq!(out.mesh.positions.len(), 2500);
