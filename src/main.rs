@@ -1,5 +1,5 @@
 //! `desal`: the driver. `run` chains every stage over a pipeline file with the cache;
-//! `inspect` describes an artifact. Thin: arguments → options → one library call.
+//! `eval` runs the paper's experiment; `inspect` describes an artifact. Thin: arguments → options → one library call.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -60,6 +60,9 @@ enum Command {
     /// Stage 4 alone: map a simplified template (desal's or another tool's) to original
     /// vertices and apply it to every pose.
     Map(desal::cli::MapArgs),
+    /// The paper's experiment: simplify with each method, fit the SCAPE deformation model
+    /// on the simplified poses, deform to every pose and measure v2f/v2v (eval.md).
+    Eval(desal::evaluate::EvalArgs),
     /// Describe artifacts: kind, version, producer, inputs, summary figures.
     Inspect {
         #[arg(required = true)]
@@ -96,6 +99,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Saliency(args) => desal::cli::saliency(&args),
         Command::Simplify(args) => desal::cli::simplify(&args),
         Command::Map(args) => desal::cli::map(&args),
+        Command::Eval(args) => desal::evaluate::eval(&args),
         Command::Inspect { files } => {
             for file in files {
                 print!("{}", desal::inspect::describe(&file)?);

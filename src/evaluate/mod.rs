@@ -1,3 +1,516 @@
 //! `desal eval`: the paper's experiment (§4) — simplify with each method, carry the
 //! simplification to every pose, fit the SCAPE deformation model on the simplified
 //! set, deform to every pose and measure v2f/v2v against the ground truth.
+//!
+//! The story of [`eval`], per dataset of the pipeline file:
+//! 1. run the pipeline's cached stages (`desal run`), so the inputs are validated
+//!    artifacts, and read the pose set, labels and stage-3 saliency weights;
+//! 2. per method ([`methods`]): simplify the template, map it to original vertices,
+//!    then [`measure::deform`]: part rotations on the simplified set, the SCAPE model
+//!    in-sample and per held-out fold, every pose synthesised;
+//! 3. [`measure::measure`] every deformed pose against the simplified and the
+//!    full-resolution ground truth;
+//! 4. write `eval.json`, `eval.md` ([`report`]), the figures ([`figures`]), optionally
+//!    every deformed mesh and the vertex-count sweep ([`sweep`]) into a temporary
+//!    folder, which then replaces `<out>/<dataset>/eval` whole.
+//!
+//! Note: `desal run` replaces `<out>/<dataset>` whole when its own outputs change, which
+//! removes a previous `eval/` folder with it; run `desal eval` again afterwards.
+
+pub mod figures;
+pub mod measure;
+pub mod methods;
+pub mod regions;
+pub mod report;
+pub mod sweep;
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use desal_io::artifact::{LabelsV1, PoseSetV1, SaliencyV1, read_artifact};
+use desal_io::ply::{PlyWriteOptions, write_ply};
+use desal_mesh::{PoseSet, TriMesh, Vec3};
+use desal_simplify::{StopReason, Target};
+use rayon::prelude::*;
+
+use crate::pipeline::{Dataset, Pipeline};
+use crate::progress::ProgressMode;
+use crate::run::RunOptions;
+use figures::{GridRow, Views};
+use measure::{Deformed, MeanStd, Measured, Run};
+use methods::{BASELINE, Inputs, Method, SimplifiedSet};
+use report::{EvalReport, FoldRecord, MethodReport, MethodTimings, PoseRecord};
+
+/// `desal eval` / `desal-eval` arguments.
+#[derive(Debug, Clone, clap::Args)]
+pub struct EvalArgs {
+    /// The pipeline file (TOML; see pipelines/README.md). Every dataset is evaluated.
+    pub pipeline: PathBuf,
+    /// Methods, comma-separated: qslim-optimal, saliency-optimal, paper-optimal,
+    /// qslim-subset, saliency-subset, paper-subset, multipose; a bare qslim, saliency or
+    /// paper means both placements; external:NAME=PATH is another tool's simplified
+    /// template; all = every built-in method.
+    #[arg(long, value_delimiter = ',', default_value = "all")]
+    pub methods: Vec<String>,
+    /// Number of held-out folds over the non-template poses (at least 2).
+    #[arg(long, default_value_t = 5)]
+    pub folds: usize,
+    /// Output root (each dataset writes OUT/<name>/eval); overrides the file's `out`.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Cache folder for the pipeline's stages (default: <output root>/.cache).
+    #[arg(long)]
+    pub cache_dir: Option<PathBuf>,
+    /// Target vertex count of every method (default: the pipeline's simplify target).
+    #[arg(long)]
+    pub target_vertices: Option<usize>,
+    /// Write every deformed mesh (and the simplified ground truth) as PLY under
+    /// eval/deformed/<method>/{in-sample,held-out,ground-truth}/<pose>.ply.
+    #[arg(long)]
+    pub save_deformed: bool,
+    /// Also evaluate qslim-optimal, paper-optimal and multipose at the --sweep-vertices
+    /// counts: sweep.json and sweep.png.
+    #[arg(long)]
+    pub sweep: bool,
+    /// Vertex counts of the sweep.
+    #[arg(long, value_delimiter = ',', default_value = "1000,2000,3000,4000,5000,6000")]
+    pub sweep_vertices: Vec<usize>,
+    /// Poses drawn in the figures (names, comma-separated; default: four spread over the
+    /// set).
+    #[arg(long, value_delimiter = ',')]
+    pub figure_poses: Vec<String>,
+    /// No progress output.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Runs `desal eval`: every dataset of the pipeline, every method; prints where each
+/// dataset's results went.
+pub fn eval(args: &EvalArgs) -> Result<()> {
+    let methods = Method::parse_list(&args.methods)?;
+    if args.folds < 2 {
+        bail!("--folds {} is too few: held-out evaluation needs at least 2 folds", args.folds);
+    }
+    if args.target_vertices == Some(0) || (args.sweep && args.sweep_vertices.contains(&0)) {
+        bail!("a target vertex count must be positive");
+    }
+    let pipeline = crate::pipeline::load(&args.pipeline, args.out.as_deref())?;
+    let options = RunOptions {
+        out: args.out.clone(),
+        cache_dir: args.cache_dir.clone(),
+        progress: if args.quiet { ProgressMode::Quiet } else { ProgressMode::Auto },
+        ..RunOptions::default()
+    };
+    crate::run::run(&pipeline, &options).context("running the pipeline's stages")?;
+    for dataset in &pipeline.datasets {
+        let dir = evaluate_dataset(&pipeline, dataset, &methods, args)
+            .with_context(|| format!("evaluating dataset '{}'", dataset.spec.name))?;
+        println!("{}: {}", dataset.spec.name, dir.join("eval.md").display());
+    }
+    Ok(())
+}
+
+/// One method carried through steps 2 and 3.
+struct MethodRun {
+    method: Method,
+    set: SimplifiedSet,
+    deformed: Deformed,
+    measured: Measured,
+}
+
+fn evaluate_dataset(
+    pipeline: &Pipeline,
+    dataset: &Dataset,
+    methods: &[Method],
+    args: &EvalArgs,
+) -> Result<PathBuf> {
+    let started = Instant::now();
+    let name = dataset.spec.name.as_str();
+    let log = |message: &str| {
+        if !args.quiet {
+            eprintln!("eval {name}: {message}");
+        }
+    };
+    let inputs = load_inputs(dataset)?;
+    let poses = &inputs.poses;
+    let target = match args.target_vertices {
+        Some(v) => Target::Vertices(v),
+        None => crate::stages::simplify::target(&dataset.spec.simplify),
+    };
+    let folds = desal_eval::folds(poses.pose_count(), poses.template, args.folds);
+    if folds.len() < 2 {
+        bail!("held-out evaluation needs at least three poses (the template and two to hold out)");
+    }
+    let evaluated: Vec<usize> = (0..poses.pose_count()).filter(|&p| p != poses.template).collect();
+
+    // Step 2: simplify, map and deform, one method at a time (each runs in parallel).
+    let mut prepared = Vec::new();
+    for method in methods {
+        let set = methods::simplify_and_map(method, &inputs, target)?;
+        log(&format!("{}: {}", method.name(), set.note));
+        let deformed = measure::deform(&set.mapped.poses, &set.mapped.labels, &folds)
+            .with_context(|| format!("{}: deformation model", method.name()))?;
+        let fit: f64 = deformed.models.iter().map(|m| m.fit_seconds + m.synthesis_seconds).sum();
+        log(&format!(
+            "{}: {} models fitted, every pose synthesised ({fit:.2} s)",
+            method.name(),
+            deformed.models.len()
+        ));
+        prepared.push((method.clone(), set, deformed));
+    }
+
+    // Step 3: every deformed pose against both ground truths.
+    let measure_started = Instant::now();
+    let runs: Vec<Run> =
+        prepared.iter().map(|(_, set, deformed)| Run { simplified: &set.mapped.poses, deformed }).collect();
+    let measured = measure::measure(poses, &evaluated, &runs);
+    let measure_seconds = measure_started.elapsed().as_secs_f64();
+    log(&format!("measured {} poses x {} methods ({measure_seconds:.2} s)", evaluated.len(), prepared.len()));
+    let runs: Vec<MethodRun> = prepared
+        .into_iter()
+        .zip(measured)
+        .map(|((method, set, deformed), measured)| MethodRun { method, set, deformed, measured })
+        .collect();
+
+    // Step 4: reports, figures, meshes, sweep — into a temporary folder first.
+    let regions = regions::Regions::new(&poses.template_mesh(), &inputs.labels);
+    let mut report = build_report(pipeline, dataset, &inputs, target, &folds, &evaluated, &runs, &regions);
+    report.measure_seconds = measure_seconds;
+    let eval_dir = dataset.out_dir.join("eval");
+    replace_dir(&eval_dir, |dir| {
+        let mut files = write_figures(dir, dataset, &inputs, &evaluated, &runs, args)?;
+        if args.save_deformed {
+            save_deformed(dir, poses, &evaluated, &runs)?;
+            files.push("deformed/<method>/{in-sample,held-out,ground-truth}/<pose>.ply".into());
+        }
+        if args.sweep {
+            let points = sweep::run_sweep(&inputs, &args.sweep_vertices, &folds, &evaluated, &log);
+            desal_io::write_json(&dir.join("sweep.json"), &points)?;
+            desal_io::write_atomic(&dir.join("sweep.png"), &figures::sweep_png(&sweep::panels(&points))?)?;
+            files.extend(["sweep.json".into(), "sweep.png".into()]);
+        }
+        report.total_seconds = started.elapsed().as_secs_f64();
+        desal_io::write_json(&dir.join("eval.json"), &report)?;
+        desal_io::write_atomic(&dir.join("eval.md"), report::markdown(&report, &files).as_bytes())?;
+        Ok(())
+    })?;
+    Ok(eval_dir)
+}
+
+/// Reads the pipeline stages' artifacts of `dataset` (written by `desal run`).
+fn load_inputs(dataset: &Dataset) -> Result<Inputs> {
+    let dir = &dataset.out_dir;
+    let poses = read_artifact::<PoseSetV1>(&dir.join("poses.dsa"))?.1.to_pose_set()?;
+    let labels = read_artifact::<LabelsV1>(&dir.join("labels.dsa"))?.1.to_labels()?;
+    let saliency = read_artifact::<SaliencyV1>(&dir.join("saliency.dsa"))?.1;
+    if saliency.weights.len() != poses.vertex_count() {
+        bail!(
+            "{}: {} saliency weights for {} vertices; re-run `desal run`",
+            dir.join("saliency.dsa").display(),
+            saliency.weights.len(),
+            poses.vertex_count()
+        );
+    }
+    let base_config = crate::stages::simplify::config(&dataset.spec.simplify)?;
+    Ok(Inputs { poses, labels, weights: saliency.weights, base_config })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn build_report(
+    pipeline: &Pipeline,
+    dataset: &Dataset,
+    inputs: &Inputs,
+    target: Target,
+    folds: &[Vec<usize>],
+    evaluated: &[usize],
+    runs: &[MethodRun],
+    regions: &regions::Regions,
+) -> EvalReport {
+    let poses = &inputs.poses;
+    let mut methods: Vec<MethodReport> =
+        runs.iter().map(|run| method_report(poses, evaluated, run, regions)).collect();
+    let baseline = methods.iter().position(|m| m.name == BASELINE);
+    if let Some(b) = baseline {
+        let base_poses = methods[b].poses.clone();
+        for (k, m) in methods.iter_mut().enumerate() {
+            if k != b {
+                m.versus_baseline = Some(report::versus(&m.poses, &base_poses));
+            }
+        }
+    }
+    EvalReport {
+        dataset: dataset.spec.name.clone(),
+        pipeline: pipeline.path.display().to_string(),
+        desal_version: env!("CARGO_PKG_VERSION").into(),
+        units: "squared distances in the input's units (m² for metre data)".into(),
+        pose_names: poses.names.clone(),
+        template: poses.template,
+        evaluated_poses: evaluated.to_vec(),
+        original_vertices: poses.vertex_count(),
+        original_faces: poses.face_count(),
+        target: match target {
+            Target::Vertices(v) => format!("vertices {v}"),
+            Target::Faces(f) => format!("faces {f}"),
+            Target::Ratio(r) => format!("ratio {r}"),
+        },
+        folds: folds
+            .iter()
+            .enumerate()
+            .map(|(fold, test)| FoldRecord {
+                fold,
+                test_poses: test.clone(),
+                training_poses: desal_eval::training_poses(poses.pose_count(), test),
+            })
+            .collect(),
+        baseline: baseline.map(|_| BASELINE.to_owned()),
+        methods,
+        joint_band_radius: regions.radius,
+        measure_seconds: 0.0,
+        total_seconds: 0.0,
+    }
+}
+
+fn method_report(
+    poses: &PoseSet,
+    evaluated: &[usize],
+    run: &MethodRun,
+    regions: &regions::Regions,
+) -> MethodReport {
+    let set = &run.set.mapped;
+    let template = set.poses.template_mesh();
+    let records: Vec<PoseRecord> = evaluated
+        .iter()
+        .enumerate()
+        .map(|(k, &pose)| PoseRecord {
+            pose,
+            name: poses.names[pose].clone(),
+            fold: run.deformed.fold_of_pose[pose].expect("every evaluated pose is in a fold"),
+            in_sample: run.measured.in_sample[k],
+            held_out: run.measured.held_out[k],
+        })
+        .collect();
+    let in_sample = &run.deformed.models[0];
+    let (edge_length_mean, edge_length_variance) = edge_lengths(&template);
+    MethodReport {
+        name: run.method.name(),
+        placement: run.method.placement().into(),
+        source: match &run.method {
+            Method::External { path, .. } => Some(path.display().to_string()),
+            _ => None,
+        },
+        vertices: set.poses.vertex_count(),
+        faces: set.poses.face_count(),
+        stop: run.set.stop.map(|s| match s {
+            StopReason::TargetReached => "target".into(),
+            StopReason::NoValidCollapse => "no-valid-collapse".into(),
+        }),
+        simplify_note: run.set.note.clone(),
+        map_mode: set.report.mode.into(),
+        displacement_mean: set.report.displacement.mean,
+        displacement_max: set.report.displacement.max,
+        edge_length_mean,
+        edge_length_variance,
+        face_area: MeanStd::of((0..template.face_count()).map(|f| template.face_area(f))),
+        regions: regions.stats(&template, &set.labels),
+        summary: report::summarise(&run.measured.in_sample, &run.measured.held_out),
+        versus_baseline: None,
+        poses: records,
+        models: run.deformed.models.clone(),
+        timings: MethodTimings {
+            simplify: run.set.simplify_seconds,
+            map: set.report.map_seconds,
+            apply_map: set.report.apply_seconds,
+            rotations: run.deformed.rotation_seconds,
+            model_fit_in_sample: in_sample.fit_seconds,
+            synthesis_per_pose: in_sample.synthesis_seconds / in_sample.test_poses.len() as f64,
+            model_fit_total: run.deformed.models.iter().map(|m| m.fit_seconds).sum(),
+            synthesis_total: run.deformed.models.iter().map(|m| m.synthesis_seconds).sum(),
+        },
+    }
+}
+
+/// Mean and population variance of the unique edge lengths (paper Fig. 3).
+fn edge_lengths(mesh: &TriMesh) -> (f64, f64) {
+    let topology = desal_mesh::EdgeTopology::new(&mesh.faces);
+    let lengths: Vec<f64> = topology
+        .edges
+        .iter()
+        .map(|&[a, b]| (mesh.positions[a as usize] - mesh.positions[b as usize]).norm())
+        .collect();
+    let n = lengths.len() as f64;
+    let mean = lengths.iter().sum::<f64>() / n;
+    (mean, lengths.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / n)
+}
+
+/// The figure poses: the named ones, or four spread evenly over the evaluated poses.
+fn figure_poses(poses: &PoseSet, evaluated: &[usize], names: &[String]) -> Result<Vec<usize>> {
+    if names.is_empty() {
+        let count = evaluated.len().min(4);
+        return Ok((0..count).map(|k| evaluated[k * evaluated.len() / count]).collect());
+    }
+    names
+        .iter()
+        .map(|n| {
+            let pose = poses.pose_index(n).with_context(|| format!("--figure-poses: no pose named '{n}'"))?;
+            if pose == poses.template {
+                bail!("--figure-poses: '{n}' is the template, which is never held out");
+            }
+            Ok(pose)
+        })
+        .collect()
+}
+
+/// Writes every PNG; returns their paths relative to `dir`.
+fn write_figures(
+    dir: &Path,
+    dataset: &Dataset,
+    inputs: &Inputs,
+    evaluated: &[usize],
+    runs: &[MethodRun],
+    args: &EvalArgs,
+) -> Result<Vec<String>> {
+    let poses = &inputs.poses;
+    let shown = figure_poses(poses, evaluated, &args.figure_poses)?;
+    let slot = |pose: usize| evaluated.iter().position(|&p| p == pose).expect("figure poses are evaluated");
+    let up = crate::pictures::parse_up_axis(dataset.spec.up_axis.as_deref())?;
+    let views = Views::of(&poses.template_mesh(), up)?;
+    let mut files = Vec::new();
+    let mut write = |name: String, bytes: Vec<u8>| -> Result<()> {
+        let path = dir.join(&name);
+        std::fs::create_dir_all(path.parent().expect("inside dir"))?;
+        desal_io::write_atomic(&path, &bytes)?;
+        files.push(name);
+        Ok(())
+    };
+
+    // Figs. 4–5: face areas of every simplified template, one range for all.
+    let templates: Vec<TriMesh> = runs.iter().map(|r| r.set.mapped.poses.template_mesh()).collect();
+    let areas: Vec<Vec<f64>> = templates.iter().map(figures::face_areas_cm2).collect();
+    let area_range = figures::shared_range(areas.iter().map(Vec::as_slice), 99.0);
+    for (run, template) in runs.iter().zip(&templates) {
+        let name = run.method.name();
+        let title = format!("{name}: face area");
+        write(
+            format!("face-area/{name}.png"),
+            figures::face_area_png(&views, template, &title, area_range)?,
+        )?;
+    }
+
+    // Error maps: distance (mm) of each held-out deformed vertex to the simplified
+    // ground-truth surface, per figure pose and as the RMS over all poses.
+    let to_mm = |squared: &[f64]| squared.iter().map(|d| d.sqrt() * 1e3).collect::<Vec<f64>>();
+    let rms_mm: Vec<Vec<f64>> = runs
+        .iter()
+        .map(|run| {
+            let per_pose = &run.measured.held_out_vertex_errors;
+            let n = per_pose.len() as f64;
+            (0..per_pose[0].len())
+                .map(|v| (per_pose.iter().map(|p| p[v]).sum::<f64>() / n).sqrt() * 1e3)
+                .collect()
+        })
+        .collect();
+    let shown_mm: Vec<Vec<Vec<f64>>> = runs
+        .iter()
+        .map(|run| shown.iter().map(|&p| to_mm(&run.measured.held_out_vertex_errors[slot(p)])).collect())
+        .collect();
+    let error_range =
+        figures::shared_range(shown_mm.iter().flatten().chain(&rms_mm).map(Vec::as_slice), 99.0);
+    let deformed_mesh = |run: &MethodRun, pose: usize| TriMesh {
+        positions: run.deformed.held_out[pose].clone().expect("evaluated poses are held out"),
+        faces: run.set.mapped.poses.faces.clone(),
+    };
+    for (m, run) in runs.iter().enumerate() {
+        let name = run.method.name();
+        let first = deformed_mesh(run, shown[0]);
+        let title = format!("{name}: RMS error, all poses (on {})", poses.names[shown[0]]);
+        write(
+            format!("errors/{name}-rms.png"),
+            figures::error_png(&views, &first, &rms_mm[m], &title, error_range)?,
+        )?;
+        for (k, &pose) in shown.iter().enumerate() {
+            let mesh = deformed_mesh(run, pose);
+            let title = format!("{name}: {}", poses.names[pose]);
+            let png = figures::error_png(&views, &mesh, &shown_mm[m][k], &title, error_range)?;
+            write(format!("errors/{name}-{}.png", poses.names[pose]), png)?;
+        }
+    }
+
+    // Fig. 7: ground truth and a few methods' held-out deformations side by side.
+    let featured: Vec<usize> = {
+        let preferred: Vec<usize> = runs
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| {
+                matches!(r.method, Method::External { .. })
+                    || ["qslim-optimal", "paper-optimal", "multipose"].contains(&r.method.name().as_str())
+            })
+            .map(|(k, _)| k)
+            .collect();
+        if preferred.is_empty() { (0..runs.len().min(3)).collect() } else { preferred }
+    };
+    let mut rows = vec![GridRow {
+        label: "ground truth".into(),
+        cells: shown.iter().map(|&p| (poses.pose_mesh(p), None)).collect(),
+    }];
+    for &m in &featured {
+        let run = &runs[m];
+        rows.push(GridRow {
+            label: run.method.name(),
+            cells: shown
+                .iter()
+                .enumerate()
+                .map(|(k, &p)| (deformed_mesh(run, p), Some(shown_mm[m][k].clone())))
+                .collect(),
+        });
+    }
+    let titles: Vec<String> = shown.iter().map(|&p| poses.names[p].clone()).collect();
+    write("deformation.png".into(), figures::deformation_grid_png(&views, &rows, &titles, error_range)?)?;
+    Ok(files)
+}
+
+/// Every evaluated pose of every method as PLY: in-sample and held-out deformations and
+/// the simplified ground truth they are measured against.
+fn save_deformed(dir: &Path, poses: &PoseSet, evaluated: &[usize], runs: &[MethodRun]) -> Result<()> {
+    let mut jobs: Vec<(PathBuf, TriMesh)> = Vec::new();
+    for run in runs {
+        let base = dir.join("deformed").join(run.method.name());
+        let faces = &run.set.mapped.poses.faces;
+        let mesh = |positions: &[Vec3]| TriMesh { positions: positions.to_vec(), faces: faces.clone() };
+        for &pose in evaluated {
+            let file = format!("{}.ply", poses.names[pose]);
+            jobs.push((base.join("in-sample").join(&file), mesh(&run.deformed.in_sample[pose])));
+            let held_out = run.deformed.held_out[pose].as_ref().expect("evaluated poses are held out");
+            jobs.push((base.join("held-out").join(&file), mesh(held_out)));
+            jobs.push((base.join("ground-truth").join(&file), run.set.mapped.poses.pose_mesh(pose)));
+        }
+    }
+    for sub in jobs.iter().filter_map(|(p, _)| p.parent()) {
+        std::fs::create_dir_all(sub).with_context(|| format!("cannot create {}", sub.display()))?;
+    }
+    jobs.par_iter().try_for_each(|(path, mesh)| -> Result<()> {
+        write_ply(path, mesh, &PlyWriteOptions::default())?;
+        Ok(())
+    })
+}
+
+/// Builds a folder's content in a temporary sibling, then swaps it into place, so
+/// `dir` is either the previous run's or this run's, never a mix.
+fn replace_dir(dir: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let parent = dir.parent().context("the eval folder has no parent")?;
+    let name = dir.file_name().context("the eval folder has no name")?.to_string_lossy().into_owned();
+    let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tmp);
+    std::fs::create_dir_all(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
+    if let Err(e) = fill(&tmp) {
+        let _ = std::fs::remove_dir_all(&tmp);
+        return Err(e);
+    }
+    let old = parent.join(format!(".{name}.old-{}", std::process::id()));
+    if dir.exists() {
+        std::fs::rename(dir, &old).with_context(|| format!("cannot replace {}", dir.display()))?;
+    }
+    std::fs::rename(&tmp, dir).with_context(|| format!("cannot move results into {}", dir.display()))?;
+    let _ = std::fs::remove_dir_all(&old);
+    Ok(())
+}

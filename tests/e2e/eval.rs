@@ -1,1 +1,273 @@
-//! `desal eval` end to end.
+//! `desal-eval` end to end on the bundled sample at 800 vertices with two folds: the
+//! reports hold every requested method, the saved meshes reproduce `eval.json` when
+//! measured independently, held-out folds never see their test poses, another tool's
+//! mesh goes through the same path as desal's own, and bad requests fail clearly.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+use crate::support::stderr;
+
+const SAMPLE_TARGET: usize = 800;
+
+fn data_samples() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("data-samples")
+}
+
+/// A pipeline for the sample at `target` vertices in `dir`, reading the poses from
+/// `poses_dir` (the bundled ones unless a test copies them).
+fn sample_pipeline(dir: &Path, poses_dir: &Path, target: usize) -> PathBuf {
+    let path = dir.join("pipeline.toml");
+    let text = format!(
+        "schema = 1\nout = \"out\"\n\n[[dataset]]\nname = \"sample\"\nposes = \"{}/*.ply\"\ntemplate = \"00_rest\"\n\
+         labels = \"{}\"\nup_axis = \"y\"\n\n[dataset.simplify]\ntarget_vertices = {target}\nplacement = \"optimal\"\n\
+         saliency = true\nbalance = true\n",
+        poses_dir.display(),
+        data_samples().join("labels.json").display(),
+    );
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn desal_eval(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_desal-eval")).args(args).output().expect("desal-eval runs")
+}
+
+/// Runs `desal-eval` quietly with two folds and returns the parsed eval.json.
+fn eval_ok(pipeline: &Path, methods: &str, extra: &[&str]) -> Value {
+    let mut args = vec![pipeline.to_str().unwrap(), "--methods", methods, "--folds", "2", "--quiet"];
+    args.extend_from_slice(extra);
+    let out = desal_eval(&args);
+    assert!(out.status.success(), "desal-eval failed: {}", stderr(&out));
+    let json = pipeline.parent().unwrap().join("out/sample/eval/eval.json");
+    serde_json::from_slice(&std::fs::read(json).unwrap()).unwrap()
+}
+
+fn method<'a>(report: &'a Value, name: &str) -> &'a Value {
+    report["methods"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["name"] == name)
+        .unwrap_or_else(|| panic!("{name}"))
+}
+
+fn f(v: &Value) -> f64 {
+    v.as_f64().unwrap()
+}
+
+/// Relative agreement: the saved meshes store positions as f32, which moves a squared
+/// distance of a few mm² by about 1e-5 of itself.
+fn assert_close(expected: f64, found: f64, what: &str) {
+    let tolerance = 1e-4 * expected.abs().max(1e-12);
+    assert!((expected - found).abs() <= tolerance, "{what}: eval.json {expected:e}, re-measured {found:e}");
+}
+
+#[test]
+fn every_requested_method_is_reported_and_the_saved_meshes_reproduce_the_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = sample_pipeline(dir.path(), &data_samples().join("poses"), SAMPLE_TARGET);
+    let methods = ["qslim-optimal", "paper-optimal", "multipose"];
+    let report = eval_ok(&pipeline, &methods.join(","), &["--save-deformed"]);
+    let eval_dir = dir.path().join("out/sample/eval");
+
+    let md = std::fs::read_to_string(eval_dir.join("eval.md")).unwrap();
+    let names: Vec<&str> =
+        report["methods"].as_array().unwrap().iter().map(|m| m["name"].as_str().unwrap()).collect();
+    assert_eq!(names, methods);
+    for name in methods {
+        // One row per method in each of the four error tables, and in the region and
+        // cost tables.
+        assert_eq!(md.matches(&format!("| {name} | {SAMPLE_TARGET} |")).count(), 5, "{name} rows in eval.md");
+        assert!(eval_dir.join(format!("face-area/{name}.png")).is_file());
+        assert!(eval_dir.join(format!("errors/{name}-rms.png")).is_file());
+        assert_eq!(method(&report, name)["vertices"], SAMPLE_TARGET);
+    }
+    assert!(eval_dir.join("deformation.png").is_file());
+    assert_eq!(report["baseline"], "qslim-optimal");
+    assert!(method(&report, "qslim-optimal")["versus_baseline"].is_null());
+    assert!(
+        method(&report, "paper-optimal")["versus_baseline"]["held_out"]["vs_full"]["v2v_percent"].is_f64()
+    );
+
+    // Every figure of eval.json, re-measured from the files by the library's own v2f
+    // and v2v: deformed mesh against the saved simplified ground truth and against the
+    // original full-resolution pose file.
+    let template = report["template"].as_u64().unwrap() as usize;
+    let evaluated: Vec<usize> =
+        report["evaluated_poses"].as_array().unwrap().iter().map(|p| p.as_u64().unwrap() as usize).collect();
+    assert_eq!(evaluated.len(), 10);
+    assert!(!evaluated.contains(&template));
+    for name in methods {
+        let m = method(&report, name);
+        let poses = m["poses"].as_array().unwrap();
+        assert_eq!(poses.len(), evaluated.len());
+        let mut v2v_sum = 0.0;
+        for record in poses {
+            let pose = record["name"].as_str().unwrap();
+            let read = |sub: &str| {
+                desal_io::read_mesh(&eval_dir.join(format!("deformed/{name}/{sub}/{pose}.ply"))).unwrap()
+            };
+            let ground_truth = read("ground-truth");
+            let full = desal_io::read_mesh(&data_samples().join(format!("poses/{pose}.ply"))).unwrap();
+            for split in ["in-sample", "held-out"] {
+                let deformed = read(split);
+                assert_eq!(deformed.faces, ground_truth.faces, "{name} {split} {pose}: shared triangles");
+                let figures = &record[split.replace('-', "_")];
+                let what = format!("{name} {split} {pose}");
+                assert_close(
+                    f(&figures["vs_simplified"]["v2f"]),
+                    desal_eval::v2f(&deformed, &ground_truth),
+                    &what,
+                );
+                assert_close(
+                    f(&figures["vs_simplified"]["v2v"]),
+                    desal_eval::v2v(&deformed, &ground_truth),
+                    &what,
+                );
+                assert_close(f(&figures["vs_full"]["v2f"]), desal_eval::v2f(&deformed, &full), &what);
+                assert_close(f(&figures["vs_full"]["v2v"]), desal_eval::v2v(&deformed, &full), &what);
+            }
+            v2v_sum += f(&record["held_out"]["vs_simplified"]["v2v"]);
+        }
+        // The summary is the mean over these poses.
+        let summary = f(&m["summary"]["held_out"]["vs_simplified"]["v2v"]["mean"]);
+        assert_close(summary, v2v_sum / poses.len() as f64, &format!("{name} held-out mean"));
+    }
+}
+
+#[test]
+fn held_out_folds_never_train_on_their_test_poses() {
+    let dir = tempfile::tempdir().unwrap();
+    let poses_dir = dir.path().join("poses");
+    std::fs::create_dir_all(&poses_dir).unwrap();
+    for entry in std::fs::read_dir(data_samples().join("poses")).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(&path, poses_dir.join(path.file_name().unwrap())).unwrap();
+    }
+    let pipeline = sample_pipeline(dir.path(), &poses_dir, SAMPLE_TARGET);
+    // QSlim ignores saliency, so changing a pose below changes neither the simplified
+    // template nor the map: only the model's training data.
+    let report = eval_ok(&pipeline, "qslim-optimal", &["--save-deformed"]);
+
+    // The recorded split: disjoint, complementary, the template always training, every
+    // other pose tested exactly once — and each model fitted on exactly that split.
+    let pose_count = report["pose_names"].as_array().unwrap().len();
+    let template = report["template"].as_u64().unwrap() as usize;
+    let list = |v: &Value| -> Vec<usize> {
+        v.as_array().unwrap().iter().map(|p| p.as_u64().unwrap() as usize).collect()
+    };
+    let folds = report["folds"].as_array().unwrap();
+    assert_eq!(folds.len(), 2);
+    let mut tested = vec![0; pose_count];
+    for fold in folds {
+        let (test, training) = (list(&fold["test_poses"]), list(&fold["training_poses"]));
+        assert!(test.iter().all(|p| !training.contains(p)), "a test pose is in its own training set");
+        assert!(training.contains(&template));
+        assert_eq!(test.len() + training.len(), pose_count);
+        for p in test {
+            tested[p] += 1;
+        }
+    }
+    assert_eq!(tested.iter().enumerate().filter(|&(p, &n)| n != usize::from(p != template)).count(), 0);
+    let qslim = method(&report, "qslim-optimal");
+    let models = qslim["models"].as_array().unwrap();
+    assert_eq!(
+        list(&models[0]["training_poses"]),
+        (0..pose_count).collect::<Vec<_>>(),
+        "in-sample: all poses"
+    );
+    for (k, fold) in folds.iter().enumerate() {
+        assert_eq!(models[k + 1]["fold"], k);
+        assert_eq!(models[k + 1]["training_poses"], fold["training_poses"]);
+        assert_eq!(models[k + 1]["test_poses"], fold["test_poses"]);
+    }
+    for record in qslim["poses"].as_array().unwrap() {
+        let fold = record["fold"].as_u64().unwrap() as usize;
+        assert!(list(&folds[fold]["test_poses"]).contains(&(record["pose"].as_u64().unwrap() as usize)));
+    }
+
+    // Behaviour, not just bookkeeping: make one pose bulge non-rigidly and evaluate
+    // again. The other poses of its fold are synthesised by a model that never saw it,
+    // so their held-out meshes stay byte-identical; the in-sample model did see it.
+    let changed = list(&folds[0]["test_poses"])[0];
+    let changed_name = report["pose_names"][changed].as_str().unwrap().to_owned();
+    let file = poses_dir.join(format!("{changed_name}.ply"));
+    let mut mesh = desal_io::read_mesh(&file).unwrap();
+    let centroid = mesh.positions.iter().sum::<desal_mesh::Vec3>() / mesh.positions.len() as f64;
+    for p in mesh.positions.iter_mut().filter(|p| p.y > centroid.y) {
+        *p = centroid + (*p - centroid) * 1.03;
+    }
+    desal_io::ply::write_ply(&file, &mesh, &Default::default()).unwrap();
+    let before = dir.path().join("before");
+    std::fs::rename(dir.path().join("out/sample/eval"), &before).unwrap();
+    eval_ok(&pipeline, "qslim-optimal", &["--save-deformed"]);
+    let after = dir.path().join("out/sample/eval");
+    let bytes = |root: &Path, split: &str, pose: usize| {
+        let name = report["pose_names"][pose].as_str().unwrap();
+        std::fs::read(root.join(format!("deformed/qslim-optimal/{split}/{name}.ply"))).unwrap()
+    };
+    let same_fold: Vec<usize> = list(&folds[0]["test_poses"]).into_iter().filter(|&p| p != changed).collect();
+    assert!(!same_fold.is_empty());
+    for &p in &same_fold {
+        assert_eq!(
+            bytes(&before, "held-out", p),
+            bytes(&after, "held-out", p),
+            "pose {p} saw pose {changed}"
+        );
+    }
+    let other_fold = list(&folds[1]["test_poses"]);
+    assert!(
+        other_fold.iter().any(|&p| bytes(&before, "held-out", p) != bytes(&after, "held-out", p)),
+        "the other fold's model trains on pose {changed}, so its output must change"
+    );
+    assert_ne!(bytes(&before, "in-sample", same_fold[0]), bytes(&after, "in-sample", same_fold[0]));
+}
+
+#[test]
+fn another_tools_mesh_is_mapped_like_desals_own_optimal_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = sample_pipeline(dir.path(), &data_samples().join("poses"), SAMPLE_TARGET);
+    // `desal run` leaves stage 3's paper-optimal template, unmapped, as a plain PLY:
+    // handed back as an external mesh it must give exactly paper-optimal's figures.
+    let out = crate::support::desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let raw = dir.path().join("out/sample/simplified-template-raw.ply");
+    let external = format!("paper-optimal,external:mine={}", raw.display());
+    let report = eval_ok(&pipeline, &external, &[]);
+    let (ours, theirs) = (method(&report, "paper-optimal"), method(&report, "mine"));
+    assert_eq!(theirs["placement"], "external");
+    assert_eq!(theirs["map_mode"], "greedy");
+    assert_eq!(theirs["vertices"], ours["vertices"]);
+    assert_eq!(theirs["poses"], ours["poses"], "same simplified set, same figures");
+    assert!(report["baseline"].is_null(), "qslim-optimal was not run");
+    let md = std::fs::read_to_string(dir.path().join("out/sample/eval/eval.md")).unwrap();
+    assert!(md.contains("| mine | 800 |"));
+}
+
+#[test]
+fn bad_requests_fail_with_a_clear_message_and_leave_no_eval_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = sample_pipeline(dir.path(), &data_samples().join("poses"), SAMPLE_TARGET);
+    let p = pipeline.to_str().unwrap();
+    let eval_dir = dir.path().join("out/sample/eval");
+
+    let out = desal_eval(&[p, "--methods", "paper-best", "--quiet"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("unknown method 'paper-best'"), "{}", stderr(&out));
+
+    let out = desal_eval(&[p, "--folds", "1", "--quiet"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("at least 2 folds"), "{}", stderr(&out));
+
+    // Forty vertices cannot cover sixteen parts: the error names the method and parts.
+    let out =
+        desal_eval(&[p, "--methods", "qslim-optimal", "--target-vertices", "40", "--folds", "2", "--quiet"]);
+    assert!(!out.status.success());
+    let message = stderr(&out);
+    assert!(message.contains("qslim-optimal: no simplified vertex carries part(s)"), "{message}");
+    assert!(message.contains("--target-vertices"), "{message}");
+    assert!(!eval_dir.exists(), "a failed evaluation leaves no results behind");
+}

@@ -1,0 +1,314 @@
+//! The experiment proper (paper §4), for the simplified pose sets of several methods:
+//!
+//! 1. [`deform`]: stage 1's rigid fit on the *simplified* set gives every pose's part
+//!    rotations; the SCAPE model is fitted on all poses (in-sample) and once per fold
+//!    without the fold's poses (held-out; the template always trains); each model
+//!    synthesises its poses from their part rotations, placed at the ground truth's
+//!    centroid.
+//! 2. [`measure`]: every deformed pose against two ground truths — the simplified pose
+//!    (the paper's measure) and the full-resolution pose (what a user cares about) — by
+//!    v2f (Eq. 6) and v2v (Eq. 7). Poses are measured in parallel; each target's search
+//!    structures are built once and shared by every method and split.
+//!
+//! A test pose's rotations come from its own ground truth, as in SCAPE: a pose is
+//! *given* by its part rotations, and what is held out is the deformation model's
+//! training data. Rotations of different poses are fitted independently, so nothing
+//! of a test pose reaches its model.
+
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use desal_eval::metrics::mean;
+use desal_eval::{ModelConfig, ModelReport, SurfaceIndex, V2fHalves, VertexIndex};
+use desal_mesh::{Face, Mat3, PartLabels, PoseSet, TriMesh, Vec3};
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// One fitted model and what it was used for.
+#[derive(Debug, Clone, Serialize)]
+pub struct ModelRun {
+    /// `None` for the in-sample model, else the fold index.
+    pub fold: Option<usize>,
+    /// Pose indices the model was fitted on (ascending), exactly as passed to the fit.
+    pub training_poses: Vec<usize>,
+    /// Pose indices it synthesised for measurement.
+    pub test_poses: Vec<usize>,
+    pub joint_count: usize,
+    /// Mean squared Frobenius residual of the per-triangle regression (dimensionless).
+    pub mean_q_residual: f64,
+    pub factor_nonzeros: usize,
+    /// Wall time of `fit_model` (regressions + factorisation), seconds.
+    pub fit_seconds: f64,
+    /// Wall time of synthesising all `test_poses`, seconds.
+    pub synthesis_seconds: f64,
+}
+
+/// Every pose of one simplified set, deformed by the model.
+#[derive(Debug)]
+pub struct Deformed {
+    /// Per pose: synthesised by the model fitted on all poses.
+    pub in_sample: Vec<Vec<Vec3>>,
+    /// Per pose: synthesised by the model of the fold holding it out; `None` for the
+    /// template (never held out).
+    pub held_out: Vec<Option<Vec<Vec3>>>,
+    /// Per pose: the fold that tests it (`None` for the template).
+    pub fold_of_pose: Vec<Option<usize>>,
+    /// The in-sample model first, then one per fold.
+    pub models: Vec<ModelRun>,
+    /// Wall time of the rigid fit on the simplified set, seconds.
+    pub rotation_seconds: f64,
+}
+
+/// Fits the model on `set` (in-sample and per fold of `folds`, each a list of test
+/// poses that excludes the template) and deforms the template to every pose.
+pub fn deform(set: &PoseSet, labels: &PartLabels, folds: &[Vec<usize>]) -> Result<Deformed> {
+    let started = Instant::now();
+    let fit = desal_fit::fit_pose_set(set, labels, &desal_fit::FitConfig::default(), &desal_mesh::NoProgress)
+        .context("stage 1 on the simplified pose set")?;
+    let rotations: Vec<Vec<Mat3>> =
+        fit.part_fits.iter().map(|parts| parts.iter().map(|f| f.linear).collect()).collect();
+    let rotation_seconds = started.elapsed().as_secs_f64();
+    let centroids: Vec<Vec3> = set.poses.iter().map(|p| centroid(p)).collect();
+
+    let all_poses: Vec<usize> = (0..set.pose_count()).collect();
+    let (in_sample_run, in_sample) =
+        fit_and_synthesise(set, labels, &rotations, &centroids, None, &all_poses)?;
+    let mut models = vec![in_sample_run];
+    let mut held_out = vec![None; set.pose_count()];
+    let mut fold_of_pose = vec![None; set.pose_count()];
+    for (k, test) in folds.iter().enumerate() {
+        debug_assert!(!test.contains(&set.template), "the template always trains");
+        let (run, synthesised) = fit_and_synthesise(set, labels, &rotations, &centroids, Some(k), test)?;
+        for (&pose, positions) in test.iter().zip(synthesised) {
+            held_out[pose] = Some(positions);
+            fold_of_pose[pose] = Some(k);
+        }
+        models.push(run);
+    }
+    Ok(Deformed { in_sample, held_out, fold_of_pose, models, rotation_seconds })
+}
+
+/// Fits one model on every pose but `test` (on every pose when `fold` is `None`) and
+/// synthesises the poses `test`, in that order.
+fn fit_and_synthesise(
+    set: &PoseSet,
+    labels: &PartLabels,
+    rotations: &[Vec<Mat3>],
+    centroids: &[Vec3],
+    fold: Option<usize>,
+    test: &[usize],
+) -> Result<(ModelRun, Vec<Vec<Vec3>>)> {
+    let training = match fold {
+        None => (0..set.pose_count()).collect(),
+        Some(_) => desal_eval::training_poses(set.pose_count(), test),
+    };
+    let what = fold.map_or_else(|| "in-sample model".to_owned(), |k| format!("model of fold {k}"));
+    let started = Instant::now();
+    let model = desal_eval::fit_model(set, labels, rotations, &training, &ModelConfig::default())
+        .with_context(|| format!("fitting the {what}"))?;
+    let fit_seconds = started.elapsed().as_secs_f64();
+    let started = Instant::now();
+    let test_rotations: Vec<Vec<Mat3>> = test.iter().map(|&p| rotations[p].clone()).collect();
+    let test_centroids: Vec<Vec3> = test.iter().map(|&p| centroids[p]).collect();
+    let synthesised = model
+        .synthesize_many(&test_rotations, &test_centroids)
+        .with_context(|| format!("synthesising with the {what}"))?;
+    let synthesis_seconds = started.elapsed().as_secs_f64();
+    let ModelReport { joint_count, mean_q_residual, factor_nonzeros, .. } = *model.report();
+    let run = ModelRun {
+        fold,
+        training_poses: training,
+        test_poses: test.to_vec(),
+        joint_count,
+        mean_q_residual,
+        factor_nonzeros,
+        fit_seconds,
+        synthesis_seconds,
+    };
+    Ok((run, synthesised))
+}
+
+fn centroid(points: &[Vec3]) -> Vec3 {
+    points.iter().sum::<Vec3>() / points.len() as f64
+}
+
+/// v2f and v2v of one deformed mesh against one target, in squared input units.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Errors {
+    /// Paper Eq. 6: symmetric, both sums over the total vertex count.
+    pub v2f: f64,
+    /// Paper Eq. 7: mean over deformed vertices of the squared distance to the nearest
+    /// target vertex.
+    pub v2v: f64,
+    /// Mean over deformed vertices of the squared distance to the target surface.
+    pub v2f_deformed_to_target: f64,
+    /// Mean over target vertices of the squared distance to the deformed surface.
+    pub v2f_target_to_deformed: f64,
+}
+
+/// The errors of one deformed pose against both ground truths.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PoseErrors {
+    /// Against the method's own simplified pose (the paper's measure).
+    pub vs_simplified: Errors,
+    /// Against the full-resolution pose.
+    pub vs_full: Errors,
+}
+
+/// A target mesh with its search structures, built once and queried by every method.
+struct Target {
+    mesh: TriMesh,
+    surface: SurfaceIndex,
+    vertices: VertexIndex,
+}
+
+impl Target {
+    fn new(mesh: TriMesh) -> Self {
+        Self { surface: SurfaceIndex::new(&mesh), vertices: VertexIndex::new(&mesh.positions), mesh }
+    }
+}
+
+/// Errors of `deformed` (with its surface index) against `target`, and the per-vertex
+/// squared distances of `deformed` to the target surface. Computed exactly as
+/// `desal_eval::v2f` and `desal_eval::v2v` compute them, so that re-measuring saved
+/// meshes reproduces the figures.
+fn errors(deformed: &TriMesh, deformed_surface: &SurfaceIndex, target: &Target) -> (Errors, Vec<f64>) {
+    let to_surface = target.surface.distances_sq(&deformed.positions);
+    let back = deformed_surface.distances_sq(&target.mesh.positions);
+    let halves = V2fHalves {
+        a_to_b: mean(&to_surface),
+        b_to_a: mean(&back),
+        a_vertex_count: deformed.vertex_count(),
+        b_vertex_count: target.mesh.vertex_count(),
+    };
+    let errors = Errors {
+        v2f: halves.combined(),
+        v2v: mean(&target.vertices.distances_sq(&deformed.positions)),
+        v2f_deformed_to_target: halves.a_to_b,
+        v2f_target_to_deformed: halves.b_to_a,
+    };
+    (errors, to_surface)
+}
+
+/// What [`measure`] found for one method, in the order of the evaluated poses.
+#[derive(Debug, Default)]
+pub struct Measured {
+    pub in_sample: Vec<PoseErrors>,
+    pub held_out: Vec<PoseErrors>,
+    /// Per evaluated pose, per deformed vertex: squared distance of the held-out
+    /// deformed vertex to the simplified ground-truth surface (heat maps).
+    pub held_out_vertex_errors: Vec<Vec<f64>>,
+}
+
+/// One method's material for [`measure`].
+#[derive(Debug, Clone, Copy)]
+pub struct Run<'a> {
+    /// The simplified ground truth (every pose) and its triangles.
+    pub simplified: &'a PoseSet,
+    pub deformed: &'a Deformed,
+}
+
+/// Measures every method's deformed poses `evaluated` (none of them the template)
+/// against the simplified and full ground truths. Returns one [`Measured`] per run.
+pub fn measure(full: &PoseSet, evaluated: &[usize], runs: &[Run]) -> Vec<Measured> {
+    type PoseResult = Vec<(PoseErrors, PoseErrors, Vec<f64>)>;
+    let per_pose: Vec<PoseResult> = evaluated
+        .par_iter()
+        .map(|&pose| {
+            let full_target = Target::new(full.pose_mesh(pose));
+            runs.iter()
+                .map(|run| {
+                    let simplified_target = Target::new(run.simplified.pose_mesh(pose));
+                    let faces = &run.simplified.faces;
+                    let held_out =
+                        run.deformed.held_out[pose].as_ref().expect("evaluated poses are held out once");
+                    let (in_sample, _) =
+                        pose_errors(&run.deformed.in_sample[pose], faces, &simplified_target, &full_target);
+                    let (held_out, vertex_errors) =
+                        pose_errors(held_out, faces, &simplified_target, &full_target);
+                    (in_sample, held_out, vertex_errors)
+                })
+                .collect()
+        })
+        .collect();
+    // Transpose to per-method results, in pose order.
+    let mut measured: Vec<Measured> = runs.iter().map(|_| Measured::default()).collect();
+    for pose_result in per_pose {
+        for (m, (in_sample, held_out, vertex_errors)) in measured.iter_mut().zip(pose_result) {
+            m.in_sample.push(in_sample);
+            m.held_out.push(held_out);
+            m.held_out_vertex_errors.push(vertex_errors);
+        }
+    }
+    measured
+}
+
+/// Both ground truths for one deformed pose; also the per-vertex squared distances to
+/// the simplified surface.
+fn pose_errors(
+    positions: &[Vec3],
+    faces: &[Face],
+    simplified: &Target,
+    full: &Target,
+) -> (PoseErrors, Vec<f64>) {
+    let deformed = TriMesh { positions: positions.to_vec(), faces: faces.to_vec() };
+    let deformed_surface = SurfaceIndex::new(&deformed);
+    let (vs_simplified, vertex_errors) = errors(&deformed, &deformed_surface, simplified);
+    let (vs_full, _) = errors(&deformed, &deformed_surface, full);
+    (PoseErrors { vs_simplified, vs_full }, vertex_errors)
+}
+
+/// Mean and sample standard deviation (n − 1; 0 for a single value) of a figure over
+/// poses.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MeanStd {
+    pub mean: f64,
+    pub std: f64,
+}
+
+impl MeanStd {
+    pub fn of(values: impl Iterator<Item = f64> + Clone) -> Self {
+        let n = values.clone().count() as f64;
+        let mean = values.clone().sum::<f64>() / n;
+        let var = if n > 1.0 { values.map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0) } else { 0.0 };
+        Self { mean, std: var.sqrt() }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mean_and_sample_deviation() {
+        let s = MeanStd::of([1.0, 2.0, 3.0, 6.0].into_iter());
+        assert_eq!(s.mean, 3.0);
+        assert!((s.std - (14.0f64 / 3.0).sqrt()).abs() < 1e-15);
+        assert_eq!(MeanStd::of([5.0].into_iter()), MeanStd { mean: 5.0, std: 0.0 });
+    }
+
+    /// The shared-index errors equal the library's own v2f and v2v on the same pair.
+    #[test]
+    fn errors_match_the_library_metrics() {
+        let v = |x: f64, y: f64, z: f64| Vec3::new(x, y, z);
+        let a = TriMesh {
+            positions: vec![v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(0.0, 1.0, 0.1), v(1.0, 1.0, 0.3)],
+            faces: vec![[0, 1, 2], [1, 3, 2]],
+        };
+        let b = TriMesh {
+            positions: vec![
+                v(0.0, 0.1, 0.2),
+                v(1.2, 0.0, 0.0),
+                v(0.0, 1.0, -0.1),
+                v(0.9, 1.1, 0.0),
+                v(0.5, 0.5, 0.4),
+            ],
+            faces: vec![[0, 1, 4], [1, 3, 4], [3, 2, 4], [2, 0, 4]],
+        };
+        let (e, per_vertex) = errors(&a, &SurfaceIndex::new(&a), &Target::new(b.clone()));
+        assert_eq!(e.v2f, desal_eval::v2f(&a, &b));
+        assert_eq!(e.v2v, desal_eval::v2v(&a, &b));
+        assert_eq!(mean(&per_vertex), e.v2f_deformed_to_target);
+        assert!(e.v2f_deformed_to_target <= e.v2v);
+    }
+}

@@ -1,0 +1,335 @@
+//! The simplification methods `desal eval` compares, and how each turns the template
+//! into a registered simplified pose set: stage 3 (or another tool's mesh), then stage 4.
+//!
+//! | name | stage 3 | stage 4 |
+//! |---|---|---|
+//! | `qslim-optimal`, `qslim-subset` | Garland–Heckbert cost, no saliency, no balance (the paper's baseline) | greedy / subset |
+//! | `saliency-optimal`, `saliency-subset` | cost × saliency weight | greedy / subset |
+//! | `paper-optimal`, `paper-subset` | cost × saliency × edge length (the paper, Eq. 5) | greedy / subset |
+//! | `multipose` | Mohr & Gleicher 2003: quadrics summed over all poses, no saliency | subset |
+//! | `external:NAME=PATH` | a simplified template made by another tool | greedy |
+//!
+//! `optimal` placement moves vertices, so they are mapped back by the paper's greedy
+//! rule; `subset` placement keeps original vertices, so the map is exact. Every other
+//! stage-3 setting (boundary weight, part borders, safeguards) is the pipeline's.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use desal_map::{MapConfig, MapMode, MapOutput};
+use desal_mesh::{PartLabels, PoseSet, TriMesh};
+use desal_simplify::{Placement, SimplifyConfig, SimplifyInput, StopReason, Target};
+
+/// Which factors of the paper's cost (Eq. 5) are on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Cost {
+    /// Plain quadric error (Garland & Heckbert 1997).
+    Qslim,
+    /// Quadric error × mean saliency weight of the edge.
+    Saliency,
+    /// Quadric error × mean saliency weight × edge length (the paper).
+    Paper,
+}
+
+impl Cost {
+    fn name(self) -> &'static str {
+        match self {
+            Cost::Qslim => "qslim",
+            Cost::Saliency => "saliency",
+            Cost::Paper => "paper",
+        }
+    }
+
+    /// `(saliency, balance)` switches of [`SimplifyConfig`].
+    pub fn switches(self) -> (bool, bool) {
+        match self {
+            Cost::Qslim => (false, false),
+            Cost::Saliency => (true, false),
+            Cost::Paper => (true, true),
+        }
+    }
+}
+
+/// One method of the comparison.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Method {
+    /// Single-pose quadric simplification of the template.
+    Quadric { cost: Cost, placement: Placement },
+    /// Multi-pose QEM (Mohr & Gleicher 2003), subset placement.
+    Multipose,
+    /// Another tool's simplified template, read from `path`.
+    External { name: String, path: PathBuf },
+}
+
+/// The methods run when none are named, in table order.
+pub const ALL: &[&str] = &[
+    "qslim-optimal",
+    "saliency-optimal",
+    "paper-optimal",
+    "qslim-subset",
+    "saliency-subset",
+    "paper-subset",
+    "multipose",
+];
+
+/// The reference row of every relative change.
+pub const BASELINE: &str = "qslim-optimal";
+
+impl Method {
+    /// The method's name in tables, file names and `eval.json`.
+    pub fn name(&self) -> String {
+        match self {
+            Method::Quadric { cost, placement } => format!("{}-{}", cost.name(), placement_name(*placement)),
+            Method::Multipose => "multipose".into(),
+            Method::External { name, .. } => name.clone(),
+        }
+    }
+
+    /// Parses one method name (see the module table).
+    pub fn parse(text: &str) -> Result<Method> {
+        if let Some(spec) = text.strip_prefix("external:") {
+            let (name, path) = spec
+                .split_once('=')
+                .with_context(|| format!("'{text}': an external method is written external:NAME=PATH"))?;
+            let valid = !name.is_empty()
+                && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+                && !ALL.contains(&name);
+            if !valid {
+                bail!("'{text}': NAME must be letters, digits, '-' or '_', and not a built-in method name");
+            }
+            return Ok(Method::External { name: name.into(), path: PathBuf::from(path) });
+        }
+        if text == "multipose" {
+            return Ok(Method::Multipose);
+        }
+        let (cost, placement) = text.split_once('-').with_context(|| unknown(text))?;
+        let cost = match cost {
+            "qslim" => Cost::Qslim,
+            "saliency" => Cost::Saliency,
+            "paper" => Cost::Paper,
+            _ => bail!(unknown(text)),
+        };
+        let placement = match placement {
+            "optimal" => Placement::Optimal,
+            "subset" => Placement::Subset,
+            _ => bail!(unknown(text)),
+        };
+        Ok(Method::Quadric { cost, placement })
+    }
+
+    /// Parses a `--methods` list: `all`, bare cost names (`paper` = `paper-optimal` and
+    /// `paper-subset`), full names, `external:NAME=PATH`. A method named twice is an error.
+    pub fn parse_list(items: &[String]) -> Result<Vec<Method>> {
+        let mut names: Vec<String> = Vec::new();
+        for item in items.iter().map(|s| s.trim()).filter(|s| !s.is_empty()) {
+            match item {
+                "all" => names.extend(ALL.iter().map(|s| s.to_string())),
+                "qslim" | "saliency" | "paper" => {
+                    names.extend(["optimal", "subset"].map(|p| format!("{item}-{p}")));
+                }
+                other => names.push(other.to_owned()),
+            }
+        }
+        if names.is_empty() {
+            bail!("no method given: use --methods with e.g. qslim,paper,multipose (or all)");
+        }
+        let methods: Vec<Method> = names.iter().map(|n| Method::parse(n)).collect::<Result<_>>()?;
+        for (k, m) in methods.iter().enumerate() {
+            if methods[..k].iter().any(|earlier| earlier.name() == m.name()) {
+                bail!("method '{}' is named twice in --methods", m.name());
+            }
+        }
+        Ok(methods)
+    }
+
+    /// `optimal`, `subset` or `external`, for reports.
+    pub fn placement(&self) -> &'static str {
+        match self {
+            Method::Quadric { placement, .. } => placement_name(*placement),
+            Method::Multipose => "subset",
+            Method::External { .. } => "external",
+        }
+    }
+}
+
+fn placement_name(placement: Placement) -> &'static str {
+    match placement {
+        Placement::Optimal => "optimal",
+        Placement::Subset => "subset",
+    }
+}
+
+fn unknown(text: &str) -> String {
+    format!(
+        "unknown method '{text}': use {}, a bare qslim/saliency/paper (both placements), all, or external:NAME=PATH",
+        ALL.join(", ")
+    )
+}
+
+/// What every method reads: the registered pose set, its labels, stage 2's weights and
+/// the pipeline's stage-3 settings.
+#[derive(Debug)]
+pub struct Inputs {
+    pub poses: PoseSet,
+    pub labels: PartLabels,
+    /// Stage-3 weights per original vertex (saliency with its floor applied).
+    pub weights: Vec<f64>,
+    /// The pipeline's stage-3 configuration; each method overrides the target, the
+    /// placement and the cost switches.
+    pub base_config: SimplifyConfig,
+}
+
+/// A method's registered simplified pose set.
+#[derive(Debug)]
+pub struct SimplifiedSet {
+    /// The simplified template as stage 3 (or the other tool) left it, `simp_idx` space.
+    pub raw: TriMesh,
+    /// Stage 4's output: the map, every pose simplified, the labels carried along.
+    pub mapped: MapOutput,
+    /// `None` for an external mesh.
+    pub stop: Option<StopReason>,
+    /// One line about the simplification (stage 3's report, or the external file).
+    pub note: String,
+    pub simplify_seconds: f64,
+}
+
+/// Simplifies the template with `method` to `target`, maps it to original vertices and
+/// applies the map to every pose.
+///
+/// Errors: the simplifier's and mapper's errors, an unreadable external mesh, and — as
+/// the deformation model needs a rigid fit of every part — a part that no simplified
+/// vertex carries, or one whose vertices are collinear: both say which parts, and that
+/// a larger target fixes it.
+pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Result<SimplifiedSet> {
+    let name = method.name();
+    let started = Instant::now();
+    let template = inputs.poses.template_mesh();
+    let (raw, kept, stop, note) = match method {
+        Method::Quadric { cost, placement } => {
+            let (saliency, balance) = cost.switches();
+            let config = SimplifyConfig {
+                target,
+                placement: *placement,
+                saliency,
+                balance,
+                ..inputs.base_config.clone()
+            };
+            let mut input = SimplifyInput::new(&template);
+            if saliency {
+                input = input.with_weights(&inputs.weights);
+            }
+            if config.part_borders != desal_simplify::PartBorders::Ignore {
+                input = input.with_part_labels(&inputs.labels.labels);
+            }
+            let result =
+                desal_simplify::simplify(&input, &config).with_context(|| format!("{name}: stage 3"))?;
+            let kept = if *placement == Placement::Subset { result.subset_indices() } else { None };
+            (result.mesh, kept, Some(result.report.stop), result.report.to_string())
+        }
+        Method::Multipose => {
+            let config =
+                SimplifyConfig { target, saliency: false, balance: false, ..inputs.base_config.clone() };
+            let labels = (config.part_borders != desal_simplify::PartBorders::Ignore)
+                .then_some(inputs.labels.labels.as_slice());
+            let result = desal_simplify::simplify_multipose(&inputs.poses, None, labels, &config)
+                .with_context(|| format!("{name}: multi-pose simplification"))?;
+            let kept = result.subset_indices();
+            (result.mesh, kept, Some(result.report.stop), result.report.to_string())
+        }
+        Method::External { path, .. } => {
+            let mesh =
+                desal_io::read_mesh(path).with_context(|| format!("{name}: reading {}", path.display()))?;
+            let mesh = compact(&mesh);
+            let note =
+                format!("{} ({} vertices, {} faces)", path.display(), mesh.vertex_count(), mesh.face_count());
+            (mesh, None, None, note)
+        }
+    };
+    let simplify_seconds = started.elapsed().as_secs_f64();
+
+    let mode = match &kept {
+        Some(kept_orig) => MapMode::Subset { kept_orig },
+        None => MapMode::Greedy,
+    };
+    let mapped = desal_map::map_pose_set(&MapConfig::default(), mode, &raw, &inputs.poses, &inputs.labels)
+        .with_context(|| format!("{name}: stage 4 (mapping to original vertices)"))?;
+    check_parts(&name, &mapped)?;
+    Ok(SimplifiedSet { raw, mapped, stop, note, simplify_seconds })
+}
+
+/// The per-part rigid fit the model starts from needs every part to keep at least three
+/// non-collinear vertices. Merging a vanished part into a neighbour would change the
+/// model being compared, so this is an error that names the parts.
+fn check_parts(name: &str, mapped: &MapOutput) -> Result<()> {
+    let labels = &mapped.labels;
+    if !mapped.report.empty_parts.is_empty() {
+        let parts: Vec<&str> =
+            mapped.report.empty_parts.iter().map(|&p| labels.names[p as usize].as_str()).collect();
+        bail!(
+            "{name}: no simplified vertex carries part(s) {}; the deformation model needs a rigid fit of every \
+             part. Use a larger --target-vertices",
+            parts.join(", ")
+        );
+    }
+    labels.check_parts_fittable(mapped.poses.template_positions()).with_context(|| {
+        format!("{name}: a part keeps too few vertices for a rigid fit; use a larger --target-vertices")
+    })?;
+    Ok(())
+}
+
+/// Drops faces that repeat a vertex or an earlier face, and vertices no face uses
+/// (another tool's file may carry either; the model needs neither), keeping order.
+fn compact(mesh: &TriMesh) -> TriMesh {
+    let (faces, _) = desal_mesh::clean_faces(&mesh.faces);
+    let mut new_index = vec![u32::MAX; mesh.vertex_count()];
+    let mut positions = Vec::new();
+    for &v in faces.iter().flatten() {
+        if new_index[v as usize] == u32::MAX {
+            new_index[v as usize] = 0;
+        }
+    }
+    for (v, slot) in new_index.iter_mut().enumerate() {
+        if *slot == 0 {
+            *slot = positions.len() as u32;
+            positions.push(mesh.positions[v]);
+        }
+    }
+    let faces = faces.iter().map(|f| f.map(|v| new_index[v as usize])).collect();
+    TriMesh { positions, faces }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bare_names_expand_to_both_placements_and_duplicates_are_refused() {
+        let names = |items: &[&str]| -> Vec<String> {
+            let items: Vec<String> = items.iter().map(|s| s.to_string()).collect();
+            Method::parse_list(&items).unwrap().iter().map(Method::name).collect()
+        };
+        assert_eq!(names(&["paper", "multipose"]), ["paper-optimal", "paper-subset", "multipose"]);
+        assert_eq!(names(&["all"]).len(), ALL.len());
+        assert_eq!(names(&["external:cgal=/x/y.ply"]), ["cgal"]);
+        let twice = Method::parse_list(&["paper".into(), "paper-subset".into()]).unwrap_err();
+        assert!(twice.to_string().contains("named twice"), "{twice}");
+        assert!(Method::parse("paper-best").is_err());
+        assert!(Method::parse("external:paper-optimal=x.ply").is_err(), "shadows a built-in");
+        assert!(Method::parse("external:a b=x.ply").is_err());
+    }
+
+    /// Vertex 1 is unused and face 2 repeats face 0: both go, the rest is renumbered in
+    /// order.
+    #[test]
+    fn compact_drops_unused_vertices_and_repeated_faces() {
+        let v = |x: f64| desal_mesh::Vec3::new(x, 0.0, 0.0);
+        let mesh = TriMesh {
+            positions: vec![v(0.0), v(1.0), v(2.0), v(3.0)],
+            faces: vec![[0, 2, 3], [3, 2, 0], [0, 0, 2]],
+        };
+        let out = compact(&mesh);
+        assert_eq!(out.positions, vec![v(0.0), v(2.0), v(3.0)]);
+        assert_eq!(out.faces, vec![[0, 1, 2]]);
+    }
+}
