@@ -94,20 +94,50 @@ pub fn draw_text(image: &mut RgbaImage, x: i64, y: i64, text: &str, scale: i64, 
     }
 }
 
-/// A short label for a colour-bar tick: plain decimals (three significant digits,
-/// trailing zeros dropped) between 0.01 and 10000, scientific notation (`1.5e-4`)
+/// A short label for a colour-bar tick: three significant digits, trailing zeros
+/// dropped; plain decimals between 0.01 and 10000, scientific notation (`1.5e-4`)
 /// outside.
 pub fn format_tick(value: f64) -> String {
+    format_significant(value, 3)
+}
+
+/// Labels for a row of axis ticks: [`format_tick`]'s, with more significant digits
+/// (up to 6) when three would print two different ticks alike (`1.45e-4`, `1.5e-4`,
+/// `1.55e-4` rather than `1.5e-4` twice).
+pub fn format_ticks(values: &[f64]) -> Vec<String> {
+    let mut labels = Vec::new();
+    for digits in 3..=6 {
+        labels = values.iter().map(|&v| format_significant(v, digits)).collect();
+        let mut sorted = labels.clone();
+        sorted.sort();
+        sorted.dedup();
+        if sorted.len() == labels.len() {
+            break;
+        }
+    }
+    labels
+}
+
+/// `value` with `digits` significant digits, trailing zeros (and a bare point) dropped.
+fn format_significant(value: f64, digits: usize) -> String {
     let magnitude = value.abs();
     if value == 0.0 {
         return "0".into();
     }
+    let trim = |text: &str| -> String {
+        if text.contains('.') {
+            text.trim_end_matches('0').trim_end_matches('.').to_owned()
+        } else {
+            text.into()
+        }
+    };
     if !(1e-2..1e4).contains(&magnitude) {
-        return format!("{value:.1e}");
+        let text = format!("{value:.prec$e}", prec = digits - 1);
+        let (mantissa, exponent) = text.split_once('e').expect("`e` formatting has an exponent");
+        return format!("{}e{exponent}", trim(mantissa));
     }
-    let decimals = (2 - magnitude.log10().floor() as i64).max(0) as usize;
-    let text = format!("{value:.decimals$}");
-    if text.contains('.') { text.trim_end_matches('0').trim_end_matches('.').to_owned() } else { text }
+    let decimals = (digits as i64 - 1 - magnitude.log10().floor() as i64).max(0) as usize;
+    trim(&format!("{value:.decimals$}"))
 }
 
 #[cfg(test)]
@@ -125,6 +155,14 @@ mod tests {
         assert_eq!(format_tick(-0.0123), "-0.0123");
         assert_eq!(format_tick(1.5e-4), "1.5e-4");
         assert_eq!(format_tick(3.08e-2), "0.0308");
+        assert_eq!(format_tick(1.53e-4), "1.53e-4");
+    }
+
+    #[test]
+    fn axis_ticks_get_the_digits_that_tell_them_apart() {
+        assert_eq!(format_ticks(&[1.45e-4, 1.5e-4, 1.55e-4]), ["1.45e-4", "1.5e-4", "1.55e-4"]);
+        assert_eq!(format_ticks(&[1.0e-4, 1.0001e-4]), ["1e-4", "1.0001e-4"]);
+        assert_eq!(format_ticks(&[0.5, 1.0]), ["0.5", "1"]);
     }
 
     #[test]

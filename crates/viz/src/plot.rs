@@ -15,7 +15,7 @@
 //! on the line below it, the plot area, then the x tick values and the x label below.
 
 use crate::error::VizError;
-use crate::font::{GLYPH_HEIGHT, draw_text, format_tick, text_width};
+use crate::font::{GLYPH_HEIGHT, draw_text, format_ticks, text_width};
 use crate::image::RgbaImage;
 use crate::render::TITLE_HEIGHT;
 
@@ -144,7 +144,7 @@ pub fn plot_frame(series: &[Series], config: &PlotConfig) -> Result<PlotFrame, V
     let (x_range, x_ticks) = linear_ticks(xlo, xhi);
     let (y_range, y_ticks) = if config.log_y { log_ticks(ylo, yhi) } else { linear_ticks(ylo, yhi) };
 
-    let label_width = y_ticks.iter().map(|&t| text_width(&format_tick(t), TEXT_SCALE)).max().unwrap_or(0);
+    let label_width = format_ticks(&y_ticks).iter().map(|l| text_width(l, TEXT_SCALE)).max().unwrap_or(0);
     let line = GLYPH_HEIGHT * TEXT_SCALE;
     let x0 = PAD + label_width + PAD;
     let y0 = TITLE_HEIGHT as i64 + line + 2 * PAD;
@@ -233,20 +233,18 @@ fn log_ticks(lo: f64, hi: f64) -> ((f64, f64), Vec<f64>) {
 fn draw_axes(image: &mut RgbaImage, frame: &PlotFrame, config: &PlotConfig) {
     let (x0, y0, x1, y1) = frame.area;
     let half_line = GLYPH_HEIGHT * TEXT_SCALE / 2;
-    for &t in &frame.x_ticks {
+    for (&t, label) in frame.x_ticks.iter().zip(format_ticks(&frame.x_ticks)) {
         let Some((px, _)) = frame.pixel(t, frame.y_range.0) else { continue };
         let px = px.round() as i64;
         image.fill_rect(px, y0, px + 1, y1, GRID_COLOUR);
         image.fill_rect(px, y1, px + 1, y1 + 5, TEXT_COLOUR);
-        let label = format_tick(t);
         draw_text(image, px - text_width(&label, TEXT_SCALE) / 2, y1 + PAD, &label, TEXT_SCALE, TEXT_COLOUR);
     }
-    for &t in &frame.y_ticks {
+    for (&t, label) in frame.y_ticks.iter().zip(format_ticks(&frame.y_ticks)) {
         let Some((_, py)) = frame.pixel(frame.x_range.0, t) else { continue };
         let py = py.round() as i64;
         image.fill_rect(x0, py, x1, py + 1, GRID_COLOUR);
         image.fill_rect(x0 - 5, py, x0, py + 1, TEXT_COLOUR);
-        let label = format_tick(t);
         let x = x0 - PAD - text_width(&label, TEXT_SCALE);
         draw_text(image, x, py - half_line, &label, TEXT_SCALE, TEXT_COLOUR);
     }
