@@ -121,6 +121,23 @@ pub struct Change {
     pub v2v_percent: f64,
     pub v2f_wins: usize,
     pub v2v_wins: usize,
+    /// Two-sided exact sign-test p-value of the per-pose wins ([`sign_test`]): how often
+    /// a method no better than the baseline would win this lopsidedly.
+    pub v2f_p: f64,
+    pub v2v_p: f64,
+}
+
+/// Two-sided exact sign test: the probability, under "each pose is a fair coin", of a
+/// split at least as lopsided as `wins` of the `n` poses whose errors differ.
+pub fn sign_test(wins: usize, n: usize) -> f64 {
+    if n == 0 {
+        return 1.0;
+    }
+    let extreme = wins.min(n - wins);
+    // ln C(n, k) - n ln 2, summed over the tail in linear space (n is a pose count).
+    let ln_choose = |k: usize| -> f64 { (1..=k).map(|i| ((n + 1 - i) as f64 / i as f64).ln()).sum() };
+    let tail: f64 = (0..=extreme).map(|k| (ln_choose(k) - n as f64 * std::f64::consts::LN_2).exp()).sum();
+    (2.0 * tail).min(1.0)
 }
 
 /// One evaluated pose of one method.
@@ -172,11 +189,16 @@ pub fn versus(method: &[PoseRecord], baseline: &[PoseRecord]) -> Versus {
             let mean = |v: &[Errors], f: fn(&Errors) -> f64| v.iter().map(f).sum::<f64>() / v.len() as f64;
             let percent = |f: fn(&Errors) -> f64| 100.0 * (mean(&ours, f) / mean(&base, f) - 1.0);
             let wins = |f: fn(&Errors) -> f64| ours.iter().zip(&base).filter(|(o, b)| f(o) < f(b)).count();
+            let differing =
+                |f: fn(&Errors) -> f64| ours.iter().zip(&base).filter(|(o, b)| f(o) != f(b)).count();
+            let p = |f: fn(&Errors) -> f64| sign_test(wins(f), differing(f));
             Change {
                 v2f_percent: percent(|e| e.v2f),
                 v2v_percent: percent(|e| e.v2v),
                 v2f_wins: wins(|e| e.v2f),
                 v2v_wins: wins(|e| e.v2v),
+                v2f_p: p(|e| e.v2f),
+                v2v_p: p(|e| e.v2v),
             }
         };
         SplitVersus { vs_simplified: change(|p| p.vs_simplified), vs_full: change(|p| p.vs_full) }
@@ -210,7 +232,9 @@ pub fn markdown(report: &EvalReport, figures: &[String]) -> String {
          **Held-out**: {}-fold over the non-template poses; each pose is deformed by the model that did not see it \
          (the template always trains). **vs simplified GT** is the paper's measure (the method's own simplified \
          pose); **vs full GT** is against the full-resolution pose. Δ is the relative change of the mean against \
-         `{}` (negative = lower error); *better on* counts the poses on which the method's error is lower.\n",
+         `{}` (negative = lower error); *better on* counts the poses on which the method's error is lower; the \
+         sign test's p is the chance of a split at least that lopsided if the method were no better than \
+         the baseline pose by pose (two-sided; small = the ranking is not luck).\n",
         report.folds.len(),
         report.baseline.as_deref().unwrap_or("(baseline not run)"),
     );
@@ -240,6 +264,10 @@ fn sci(x: f64) -> String {
     if x.is_finite() { format!("{x:.3e}") } else { "—".into() }
 }
 
+fn p_value(p: f64) -> String {
+    if p < 1e-3 { format!("{p:.0e}") } else { format!("{p:.3}") }
+}
+
 fn percent(x: f64) -> String {
     if x.is_finite() { format!("{x:+.1} %") } else { "—".into() }
 }
@@ -247,8 +275,11 @@ fn percent(x: f64) -> String {
 fn error_table(md: &mut String, report: &EvalReport, title: &str, held_out: bool, full: bool) {
     let n = report.evaluated_poses.len();
     let _ = writeln!(md, "## {title}\n");
-    let _ = writeln!(md, "| method | vertices | v2f | Δ v2f | v2v | Δ v2v | better on (v2f / v2v) |");
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|");
+    let _ = writeln!(
+        md,
+        "| method | vertices | v2f | Δ v2f | v2v | Δ v2v | better on (v2f / v2v) | sign test p (v2f / v2v) |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
     for m in &report.methods {
         let split = if held_out { &m.summary.held_out } else { &m.summary.in_sample };
         let figures = if full { &split.vs_full } else { &split.vs_simplified };
@@ -256,17 +287,18 @@ fn error_table(md: &mut String, report: &EvalReport, title: &str, held_out: bool
             let s = if held_out { v.held_out } else { v.in_sample };
             if full { s.vs_full } else { s.vs_simplified }
         });
-        let (dv2f, dv2v, wins) = match change {
+        let (dv2f, dv2v, wins, p) = match change {
             Some(c) => (
                 percent(c.v2f_percent),
                 percent(c.v2v_percent),
                 format!("{} / {} of {n}", c.v2f_wins, c.v2v_wins),
+                format!("{} / {}", p_value(c.v2f_p), p_value(c.v2v_p)),
             ),
-            None => ("—".into(), "—".into(), "—".into()),
+            None => ("—".into(), "—".into(), "—".into(), "—".into()),
         };
         let _ = writeln!(
             md,
-            "| {} | {} | {} ± {} | {dv2f} | {} ± {} | {dv2v} | {wins} |",
+            "| {} | {} | {} ± {} | {dv2f} | {} ± {} | {dv2v} | {wins} | {p} |",
             m.name,
             m.vertices,
             sci(figures.v2f.mean),
@@ -424,4 +456,21 @@ fn cost_table(md: &mut String, report: &EvalReport) {
         );
     }
     let _ = writeln!(md);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::sign_test;
+
+    #[test]
+    fn sign_test_matches_exact_binomial_tails() {
+        // 2 · P(X ≤ 1), X ~ B(10, 1/2) = 2 · 11 / 1024.
+        assert!((sign_test(9, 10) - 22.0 / 1024.0).abs() < 1e-15);
+        assert!((sign_test(1, 10) - 22.0 / 1024.0).abs() < 1e-15);
+        assert_eq!(sign_test(5, 10), 1.0);
+        assert_eq!(sign_test(0, 0), 1.0);
+        // 2 · Σ_{k ≤ 13} C(70, k) / 2^70, in exact integers (Python's math.comb).
+        let p = sign_test(57, 70);
+        assert!((p / 1.0289941458812896e-7 - 1.0).abs() < 1e-9, "{p}");
+    }
 }
