@@ -63,7 +63,7 @@ pub struct SaliencyArgs {
     pub up_axis: Option<String>,
 }
 
-/// `desal map`: stage 4 on a simplified template — desal's own artifact, or a PLY/OBJ
+/// `desal map`: stage 4 on a simplified template — desal's own artifact, or a PLY/OBJ/OFF
 /// made by another tool (MeshLab, CGAL, meshoptimizer), mapped by the same greedy rule.
 #[derive(Debug, clap::Args)]
 pub struct MapArgs {
@@ -73,7 +73,7 @@ pub struct MapArgs {
     /// Labels artifact (`labels.dsa`).
     #[arg(long)]
     pub labels: PathBuf,
-    /// The simplified template: `simplified.dsa`, or a mesh file (.ply, .obj).
+    /// The simplified template: `simplified.dsa`, or a mesh file (.ply, .obj, .off: CGAL writes OFF).
     #[arg(long)]
     pub simplified: PathBuf,
     /// Where to write the map artifact.
@@ -89,7 +89,7 @@ pub struct MapArgs {
 #[derive(Debug, clap::Args)]
 #[command(group(clap::ArgGroup::new("target").required(true).args(["target_faces", "target_vertices", "ratio"])))]
 pub struct SimplifyArgs {
-    /// Input mesh (PLY or OBJ).
+    /// Input mesh (PLY, OBJ or OFF).
     #[arg(long)]
     pub input: PathBuf,
     /// Output mesh (PLY), written atomically.

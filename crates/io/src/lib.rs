@@ -12,6 +12,7 @@ pub mod codec;
 pub mod error;
 pub mod labels;
 pub mod obj;
+pub mod off;
 pub mod ply;
 
 use std::path::Path;
@@ -22,13 +23,15 @@ pub use error::IoError;
 
 use desal_mesh::TriMesh;
 
-/// Reads a triangle mesh from a PLY (ASCII or binary) or OBJ file, chosen by extension.
+/// Reads a triangle mesh from a PLY (ASCII or binary), OBJ or ASCII OFF file, chosen by
+/// extension.
 /// Polygons are fan-triangulated; vertex order is kept. Validates face index ranges and
 /// finite coordinates.
 pub fn read_mesh(path: &Path) -> Result<TriMesh, IoError> {
     match extension(path).as_str() {
         "ply" => ply::read_ply(path),
         "obj" => obj::read_obj(path),
+        "off" => off::read_off(path),
         other => Err(IoError::UnsupportedFormat { path: path.to_owned(), extension: other.to_owned() }),
     }
 }

@@ -107,6 +107,33 @@ fn obj_quads_and_ngons_are_fan_triangulated_in_vertex_order() {
 }
 
 #[test]
+fn off_polygons_are_fan_triangulated_and_colours_and_comments_ignored() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("m.off");
+    // CGAL's layout, a comment, a vertex split over two lines, a face with a colour.
+    std::fs::write(
+        &path,
+        "OFF\n5 2 0\n# vertices\n0 0 0\n1 0 0\n1 1\n0\n0 1 0\n0.5 2 0\n4 0 1 2 3 255 0 0\n3 3 2 4\n",
+    )
+    .unwrap();
+    let mesh = read_mesh(&path).unwrap();
+    assert_eq!(mesh.vertex_count(), 5);
+    assert_eq!(mesh.positions[2], Vec3::new(1.0, 1.0, 0.0));
+    assert_eq!(mesh.faces, vec![[0, 1, 2], [0, 2, 3], [3, 2, 4]]);
+    for (text, expected) in [
+        ("OFF\n5 2 0\n0 0 0\n1 0 0\n", "truncated"),
+        ("COFF\n1 0 0\n", "m.off:1"),
+        ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 x\n", "m.off:6"),
+        ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n", "after the last of 1 faces"),
+        ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", "7"),
+    ] {
+        std::fs::write(&path, text).unwrap();
+        let error = read_mesh(&path).unwrap_err().to_string();
+        assert!(error.contains(expected) && error.contains("m.off"), "{text:?}: {error}");
+    }
+}
+
+#[test]
 fn labels_read_from_text_and_json() {
     let dir = tempfile::tempdir().unwrap();
     let txt = dir.path().join("l.txt");
