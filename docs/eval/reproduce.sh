@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Reproduces EVAL.md's SCAPE run and refreshes the copies in docs/eval/:
+# every built-in method, CGAL Lindstrom-Turk as the paper's third baseline (when the
+# peers are set up: PEERS_HOME=/tmp/desal-peers bash ../shared/peers/setup.sh), 5 folds,
+# the 1000..6000-vertex sweep. About 2 minutes on 2 cores.
+#
+#   bash docs/eval/reproduce.sh [OUT_DIR]           (default: /tmp/desal-eval-scape)
+set -euo pipefail
+repo=$(cd "$(dirname "$0")/../.." && pwd)
+out=${1:-/tmp/desal-eval-scape}
+peers=${PEERS_HOME:-/tmp/desal-peers}
+scape="$repo/../shared/datasets/scape"
+[ -d "$scape" ] || { echo "skipped: SCAPE is not at $scape (research-use data)"; exit 0; }
+cargo build --release --quiet --manifest-path "$repo/Cargo.toml" --bin desal
+mkdir -p "$out"
+methods=all
+if [ -x "$peers/cgal_simplify" ]; then
+  # 4996 faces = 2500 vertices on SCAPE's closed genus-0 template, the methods' target.
+  "$peers/cgal_simplify" "$scape/mesh000.ply" "$out/cgal-lt-2500.off" 4996 lt 1 > /dev/null
+  methods="all,external:cgal-lt=$out/cgal-lt-2500.off"
+else
+  echo "note: no CGAL driver at $peers; running without the cgal-lt column" >&2
+fi
+"$repo/target/release/desal" eval "$repo/pipelines/scape.toml" --out "$out" --methods "$methods" --sweep --quiet
+eval_dir="$out/scape/eval"
+dest="$repo/docs/eval"
+cp "$eval_dir/eval.md" "$dest/scape-eval.md"
+cp "$eval_dir/sweep.json" "$dest/scape-sweep.json"
+for png in sweep.png deformation.png face-area/qslim-optimal.png face-area/paper-optimal.png \
+           errors/qslim-optimal-rms.png errors/paper-optimal-rms.png errors/paper-subset-rms.png; do
+  cp "$eval_dir/$png" "$dest/$(echo "$png" | tr / -)"
+done
+echo "eval.md, eval.json and every figure: $eval_dir; copies in docs/eval/"
