@@ -198,15 +198,24 @@ fn run_engine(
     // followed by an exhaustive one, which tries every edge in cost order; when that
     // achieves nothing either, no valid collapse is left.
     let mut pass = Pass::Batched;
+    // Costs of the previous pass: an edge whose endpoints did not change since keeps its
+    // cost (the quadric cost depends on the endpoints alone), so only edges around the
+    // last pass's collapses are costed again.
+    let mut previous = EdgeCosts::default();
     while !target.reached(&engine) {
+        engine.pass += 1;
         let edges = engine.pick_edge_collapses();
-        let order = engine.rank_edge_collapses(&edges, target.remaining(&engine), pass == Pass::Batched);
+        let costs = engine.cost_edge_collapses(&edges, &previous);
+        let order = engine.rank_edge_collapses(&costs, target.remaining(&engine), pass == Pass::Batched);
         let before = engine.collapses;
         match pass {
             Pass::Batched => engine.perform_chosen_collapses(&edges, &order, &target),
             Pass::Exhaustive => engine.perform_collapses_in_order(&edges, &order, &target),
         }
         progress.advance((engine.collapses - before) as u64);
+        if !engine.params.lindstrom_turk {
+            previous = EdgeCosts { edges, costs };
+        }
         pass = match (engine.collapses > before, pass) {
             (true, _) => Pass::Batched,
             (false, Pass::Batched) => Pass::Exhaustive,
@@ -313,6 +322,14 @@ enum Refusal {
     Degenerate,
 }
 
+/// The live edges of one pass, `[lo, hi]` ascending, and the cost of each (infinite
+/// when the edge may not collapse).
+#[derive(Debug, Default)]
+struct EdgeCosts {
+    edges: Vec<[u32; 2]>,
+    costs: Vec<f64>,
+}
+
 /// Settings the inner loop reads, derived once from the config.
 #[derive(Debug)]
 struct Params {
@@ -357,6 +374,10 @@ struct Engine {
     epoch: u32,
     /// Slots changed in the current pass (`== pass`): their edges wait for the next.
     changed_in_pass: Vec<u32>,
+    /// The pass in which each slot's quadric, position, weight or flags last changed
+    /// (0: never): its edges' costs from earlier passes are stale.
+    modified_in_pass: Vec<u32>,
+    /// The current pass, counted from 1.
     pass: u32,
     /// The input vertex whose exact position the slot holds, or `MOVED`.
     origin: Vec<u32>,
@@ -394,23 +415,41 @@ impl Engine {
         let center = mesh.bounding_box().map_or(Vec3::zeros(), |(lo, hi)| (lo + hi) * 0.5);
         let local: Vec<Vec<Vec3>> = poses.iter().map(|p| p.iter().map(|x| x - center).collect()).collect();
         let vertex_faces = VertexFaces::new(n, &faces);
+        // Each face's plane quadric once (a vertex sums those of its faces), and its
+        // input normal. Several poses would need one quadric per face and pose: those
+        // are computed where they are summed instead.
+        let (face_quadrics, input_normals): (Vec<Quadric>, Vec<Vec3>) = faces
+            .par_iter()
+            .map(|f| {
+                let quadric = if pose_count == 1 {
+                    let [a, b, c] = f.map(|v| local[0][v as usize]);
+                    Quadric::from_triangle(&a, &b, &c)
+                } else {
+                    Quadric::default()
+                };
+                let [a, b, c] = f.map(|v| mesh.positions[v as usize]);
+                (quadric, (b - a).cross(&(c - a)))
+            })
+            .unzip();
+        let context = ClassifyContext {
+            faces: &faces,
+            vertex_faces: &vertex_faces,
+            poses: &local,
+            face_quadrics: (pose_count == 1).then_some(face_quadrics.as_slice()),
+            part_labels,
+            config,
+        };
 
         let chunks: Vec<ChunkOut> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map(|chunk| {
-                let mut out = ChunkOut::default();
+                let mut out = ChunkOut {
+                    quadrics: Vec::with_capacity(CHUNK * pose_count),
+                    flags: Vec::with_capacity(CHUNK),
+                };
                 let mut link = LinkScratch::default();
                 for v in (chunk * CHUNK)..((chunk + 1) * CHUNK).min(n) {
-                    classify_vertex(
-                        v as u32,
-                        &faces,
-                        &vertex_faces,
-                        &local,
-                        part_labels,
-                        config,
-                        &mut link,
-                        &mut out,
-                    );
+                    context.classify_vertex(v as u32, &mut link, &mut out);
                 }
                 out
             })
@@ -450,22 +489,21 @@ impl Engine {
             weights: weights.filter(|_| config.saliency).map(<[f64]>::to_vec),
             live_faces: faces.len(),
             face_alive: vec![true; faces.len()],
-            input_normals: faces
-                .iter()
-                .map(|f| {
-                    let [a, b, c] = f.map(|v| mesh.positions[v as usize]);
-                    (b - a).cross(&(c - a))
-                })
-                .collect(),
+            input_normals,
             faces,
             face_start: vertex_faces.offsets[..n].to_vec(),
             face_len,
-            refs: vertex_faces.faces,
+            refs: {
+                let mut refs = vertex_faces.faces;
+                refs.reserve(refs_limit + 64 - refs.len());
+                refs
+            },
             refs_limit,
             flags,
             marks: vec![0; n],
             epoch: 0,
             changed_in_pass: vec![0; n],
+            modified_in_pass: vec![0; n],
             pass: 0,
             origin: (0..n as u32).collect(),
             live_vertices,
@@ -483,18 +521,24 @@ impl Engine {
         let chunks: Vec<Vec<[u32; 2]>> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map(|chunk| {
-                let mut edges = Vec::new();
-                let mut upper = Vec::new();
+                let mut edges = Vec::with_capacity(3 * CHUNK);
+                let mut upper: Vec<u32> = Vec::with_capacity(16);
                 for v in (chunk * CHUNK) as u32..((chunk + 1) * CHUNK).min(n) as u32 {
                     if self.flags[v as usize] & (ALIVE | FROZEN) != ALIVE {
                         continue;
                     }
+                    // A vertex has few neighbours: insertion into a sorted run beats
+                    // collecting, sorting and deduplicating.
                     upper.clear();
                     for &f in self.faces_of(v) {
-                        upper.extend(self.faces[f as usize].iter().copied().filter(|&x| x > v));
+                        for x in self.faces[f as usize] {
+                            if x > v
+                                && let Err(at) = upper.binary_search(&x)
+                            {
+                                upper.insert(at, x);
+                            }
+                        }
                     }
-                    upper.sort_unstable();
-                    upper.dedup();
                     edges.extend(upper.iter().map(|&x| [v, x]));
                 }
                 edges
@@ -503,17 +547,44 @@ impl Engine {
         chunks.concat()
     }
 
-    /// Pass, step 2: the cost of every edge (in parallel), and the indices into `edges`
-    /// of those this pass may perform, cheapest first (ties by edge, i.e. `(lo, hi)`).
-    /// With `limited`, only costs up to `PASS_ERROR_FACTOR` times the cost of the
-    /// `needed`-th cheapest (capped by `PASS_GOAL_FRACTION`) are kept.
-    fn rank_edge_collapses(&self, edges: &[[u32; 2]], needed: usize, limited: bool) -> Vec<u32> {
-        let costs: Vec<f64> =
-            edges.par_iter().map(|&[a, b]| self.evaluate(a, b).map_or(f64::INFINITY, |c| c.cost)).collect();
+    /// Pass, step 2: the cost of every edge (in parallel, order kept): taken from
+    /// `previous` when neither endpoint changed in the last pass, evaluated otherwise.
+    fn cost_edge_collapses(&self, edges: &[[u32; 2]], previous: &EdgeCosts) -> Vec<f64> {
+        let stale = self.pass - 1;
+        let chunks: Vec<Vec<f64>> = edges
+            .par_chunks(CHUNK)
+            .map(|chunk| {
+                // Both lists ascend: walk `previous` alongside from the chunk's first edge.
+                let mut j = previous.edges.partition_point(|e| *e < chunk[0]);
+                chunk
+                    .iter()
+                    .map(|&[a, b]| {
+                        while j < previous.edges.len() && previous.edges[j] < [a, b] {
+                            j += 1;
+                        }
+                        let unchanged = self.modified_in_pass[a as usize] < stale
+                            && self.modified_in_pass[b as usize] < stale;
+                        if unchanged && previous.edges.get(j) == Some(&[a, b]) {
+                            previous.costs[j]
+                        } else {
+                            self.cost_of(a, b)
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        chunks.concat()
+    }
+
+    /// Pass, step 3: the indices into the pass's edges of those this pass may perform,
+    /// cheapest first (ties by edge, i.e. `(lo, hi)`). With `limited`, only costs up to
+    /// `PASS_ERROR_FACTOR` times the cost of the `needed`-th cheapest (capped by
+    /// `PASS_GOAL_FRACTION`) are kept.
+    fn rank_edge_collapses(&self, costs: &[f64], needed: usize, limited: bool) -> Vec<u32> {
         let mut limit = f64::INFINITY;
         if limited && !costs.is_empty() {
             let goal = ((needed as f64 * PASS_GOAL_FRACTION).ceil() as usize).clamp(1, costs.len());
-            let mut scratch = costs.clone();
+            let mut scratch = costs.to_vec();
             let (_, nth, _) = scratch.select_nth_unstable_by(goal - 1, f64::total_cmp);
             limit = *nth * PASS_ERROR_FACTOR;
         }
@@ -524,11 +595,11 @@ impl Engine {
             .filter(|&(_, &c)| c.is_finite() && c <= limit)
             .map(|(i, c)| (c.to_bits(), i as u32))
             .collect();
-        order.par_sort_unstable();
+        order.sort_unstable();
         order.into_iter().map(|(_, i)| i).collect()
     }
 
-    /// Pass, step 3: choose, in cost order, as many collapses as are still needed with
+    /// Pass, step 4: choose, in cost order, as many collapses as are still needed with
     /// no endpoint shared (a shared endpoint would make the later cost stale), then
     /// perform them in vertex order, each re-checked against the current mesh.
     ///
@@ -537,7 +608,6 @@ impl Engine {
     /// same either way; only the order of mutually non-adjacent collapses changes, and
     /// the safeguards see the mesh as it is when each one is performed.
     fn perform_chosen_collapses(&mut self, edges: &[[u32; 2]], order: &[u32], target: &StopAt) {
-        self.pass += 1;
         let wanted = target.remaining(self).max(1);
         let mut chosen = Vec::with_capacity(wanted.min(order.len()));
         for &i in order {
@@ -569,10 +639,9 @@ impl Engine {
         }
     }
 
-    /// Pass, step 3 when batched passes are stuck: perform the ranked collapses in cost
+    /// Pass, step 4 when batched passes are stuck: perform the ranked collapses in cost
     /// order, each checked as it comes, skipping edges with an endpoint already changed.
     fn perform_collapses_in_order(&mut self, edges: &[[u32; 2]], order: &[u32], target: &StopAt) {
-        self.pass += 1;
         for &i in order {
             if target.reached(self) {
                 break;
@@ -765,27 +834,53 @@ impl Engine {
     /// Optimal placement (single pose): the quadric's minimiser if well-conditioned and
     /// near the edge, else the best point of the segment, else the better endpoint.
     fn place_optimally(&self, a: u32, b: u32) -> Candidate {
-        let q = self.quadrics[a as usize] + self.quadrics[b as usize];
-        let pa = self.positions[a as usize];
-        let pb = self.positions[b as usize];
-        let mid = (pa + pb) * 0.5;
-        let reach = self.params.max_placement_distance * (pa - pb).norm();
-        let (error_a, error_b) = (q.eval(&pa), q.eval(&pb));
-        let (endpoint, endpoint_error) = if error_b < error_a { (pb, error_b) } else { (pa, error_a) };
-        let computed =
-            q.minimiser().filter(|p| (p - mid).norm() <= reach).or_else(|| q.minimiser_on_segment(&pa, &pb));
-        // An endpoint as good as the computed point up to rounding is preferred: the
-        // vertex then keeps its exact input position (and `simp_to_orig` entry).
-        let position = match computed {
-            Some(p) if endpoint_error > q.eval(&p).max(0.0) * (1.0 + SNAP_TOLERANCE) => p,
-            _ => endpoint,
-        };
+        let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
+        let (position, error) = self.optimal_position(a, b);
         // The slot kept is the endpoint the new position coincides with, else the
         // nearer one (lower index on a tie), so unmoved vertices keep their identity.
         let (da, db) = ((position - pa).norm_squared(), (position - pb).norm_squared());
         let keep = if da < db || (da == db && a < b) { a } else { b };
         let remove = if keep == a { b } else { a };
-        Candidate { remove, keep, position, error: q.eval(&position).max(0.0), cost: 0.0 }
+        Candidate { remove, keep, position, error, cost: 0.0 }
+    }
+
+    /// The optimal placement of `(a, b)` (see [`Self::place_optimally`]) and the merged
+    /// quadric's error there: all that ranking needs.
+    #[inline]
+    fn optimal_position(&self, a: u32, b: u32) -> (Vec3, f64) {
+        let q = self.quadrics[a as usize] + self.quadrics[b as usize];
+        let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
+        let (error_a, error_b) = (q.eval(&pa), q.eval(&pb));
+        let (endpoint, endpoint_error) = if error_b < error_a { (pb, error_b) } else { (pa, error_a) };
+        let mid = (pa + pb) * 0.5;
+        let reach = self.params.max_placement_distance * (pa - pb).norm();
+        let computed = match q.minimiser() {
+            Some(p) if (p - mid).norm() <= reach => Some(p),
+            _ => q.minimiser_on_segment(&pa, &pb),
+        };
+        // An endpoint as good as the computed point up to rounding is preferred: the
+        // vertex then keeps its exact input position (and `simp_to_orig` entry).
+        if let Some(p) = computed {
+            let error = q.eval(&p).max(0.0);
+            if endpoint_error > error * (1.0 + SNAP_TOLERANCE) {
+                return (p, error);
+            }
+        }
+        (endpoint, endpoint_error.max(0.0))
+    }
+
+    /// The cost of collapsing `(a, b)`, infinite when it may not collapse: what
+    /// [`Self::evaluate`] gives, without choosing the slot kept (the common case, an
+    /// optimal placement with neither endpoint pinned, has a short path).
+    #[inline]
+    fn cost_of(&self, a: u32, b: u32) -> f64 {
+        let (fa, fb) = (self.flags[a as usize], self.flags[b as usize]);
+        if self.params.subset || self.params.lindstrom_turk || (fa | fb) & (FROZEN | PINNED) != 0 {
+            return self.evaluate(a, b).map_or(f64::INFINITY, |c| c.cost);
+        }
+        let (pa, pb) = (&self.positions[a as usize], &self.positions[b as usize]);
+        let cost = self.cost_factors(a, b, self.optimal_position(a, b).1, pa, pb);
+        if cost.is_finite() { cost } else { f64::INFINITY }
     }
 
     fn candidate_at(&self, a: u32, b: u32, position: Vec3, keep: u32) -> Candidate {
@@ -920,6 +1015,7 @@ impl Engine {
         let (ku, ru) = (k as usize, r as usize);
         self.flags[ku] |= self.flags[ru] & BOUNDARY;
         self.flags[ru] &= !ALIVE;
+        self.modified_in_pass[ku] = self.pass;
         if c.position != self.positions[ku] {
             self.origin[ku] = MOVED;
             self.positions[ku] = c.position;
@@ -971,13 +1067,14 @@ impl Engine {
 
     /// Copies every live vertex's face run to the front, dropping abandoned runs.
     fn compact_refs(&mut self) {
-        let mut refs = Vec::with_capacity(self.refs_limit / 2 + 1024);
+        let mut refs = Vec::with_capacity(self.refs_limit + 64);
         for v in 0..self.face_start.len() {
             let s = self.face_start[v] as usize;
             self.face_start[v] = refs.len() as u32;
             refs.extend_from_slice(&self.refs[s..s + self.face_len[v] as usize]);
         }
         self.refs_limit = (2 * refs.len()).max(self.refs_limit / 2) + 1024;
+        refs.reserve(self.refs_limit + 64 - refs.len());
         self.refs = refs;
     }
 
@@ -1101,74 +1198,90 @@ impl LinkScratch {
     }
 }
 
-/// Classifies vertex `v` and appends its quadrics (one per pose) and flags to `out`. A vertex is non-manifold (FROZEN) when an incident edge has more than two
-/// faces or its faces form more than one fan (a pinch, like SCAPE's vertex 419).
-#[allow(clippy::too_many_arguments)]
-fn classify_vertex(
-    v: u32,
-    faces: &[[u32; 3]],
-    vertex_faces: &VertexFaces,
-    poses: &[Vec<Vec3>],
-    part_labels: Option<&[u32]>,
-    config: &SimplifyConfig,
-    link: &mut LinkScratch,
-    out: &mut ChunkOut,
-) {
-    link.neighbours.clear();
-    link.counts.clear();
-    link.parent.clear();
-    let my_faces = vertex_faces.of(v);
-    for &f in my_faces {
-        let [x, y] = others(faces[f as usize], v);
-        let (i, j) = (link.slot(x), link.slot(y));
-        link.counts[i] += 1;
-        link.counts[j] += 1;
-        let (ri, rj) = (link.root(i), link.root(j));
-        link.parent[ri.max(rj)] = ri.min(rj);
-    }
-    let fans = (0..link.neighbours.len()).filter(|&i| link.parent[i] == i).count();
-    let mut flags = if my_faces.is_empty() { 0 } else { ALIVE };
-    if link.counts.contains(&1) {
-        flags |= BOUNDARY;
-    }
-    if fans > 1 || link.counts.iter().any(|&c| c > 2) {
-        flags |= FROZEN;
-    }
-    let label_of = |x: u32| part_labels.map(|l| l[x as usize]);
-    let on_part_border = part_labels.is_some() && link.neighbours.iter().any(|&x| label_of(x) != label_of(v));
-    if on_part_border && config.part_borders == PartBorders::Lock {
-        flags |= PINNED;
-    }
-    let border_weight = match config.part_borders {
-        PartBorders::Constrain(w) if on_part_border => Some(w),
-        _ => None,
-    };
+/// What the classification of one vertex reads.
+struct ClassifyContext<'a> {
+    faces: &'a [[u32; 3]],
+    vertex_faces: &'a VertexFaces,
+    /// Local positions, `[pose][vertex]`.
+    poses: &'a [Vec<Vec3>],
+    /// The plane quadric of every face, when there is one pose.
+    face_quadrics: Option<&'a [Quadric]>,
+    part_labels: Option<&'a [u32]>,
+    config: &'a SimplifyConfig,
+}
 
-    for positions in poses {
-        let mut q = Quadric::default();
-        let pv = &positions[v as usize];
+impl ClassifyContext<'_> {
+    /// Classifies vertex `v` and appends its quadrics (one per pose) and flags to
+    /// `out`. A vertex is non-manifold (FROZEN) when an incident edge has more than two
+    /// faces or its faces form more than one fan (a pinch, like SCAPE's vertex 419).
+    fn classify_vertex(&self, v: u32, link: &mut LinkScratch, out: &mut ChunkOut) {
+        let (faces, config) = (self.faces, self.config);
+        link.neighbours.clear();
+        link.counts.clear();
+        link.parent.clear();
+        let my_faces = self.vertex_faces.of(v);
         for &f in my_faces {
-            let face = faces[f as usize];
-            let [p0, p1, p2] = face.map(|x| positions[x as usize]);
-            q += &Quadric::from_triangle(&p0, &p1, &p2);
-            let cross = (p1 - p0).cross(&(p2 - p0));
-            for x in others(face, v) {
-                let i = link.neighbours.iter().position(|&n| n == x).expect("collected above");
-                let px = &positions[x as usize];
-                if link.counts[i] == 1 && config.boundary_weight > 0.0 {
-                    q += &Quadric::edge_constraint(pv, px, &cross, config.boundary_weight);
+            let [x, y] = others(faces[f as usize], v);
+            let (i, j) = (link.slot(x), link.slot(y));
+            link.counts[i] += 1;
+            link.counts[j] += 1;
+            let (ri, rj) = (link.root(i), link.root(j));
+            link.parent[ri.max(rj)] = ri.min(rj);
+        }
+        let fans = (0..link.neighbours.len()).filter(|&i| link.parent[i] == i).count();
+        let mut flags = if my_faces.is_empty() { 0 } else { ALIVE };
+        let on_boundary = link.counts.contains(&1);
+        if on_boundary {
+            flags |= BOUNDARY;
+        }
+        if fans > 1 || link.counts.iter().any(|&c| c > 2) {
+            flags |= FROZEN;
+        }
+        let label_of = |x: u32| self.part_labels.map(|l| l[x as usize]);
+        let on_part_border =
+            self.part_labels.is_some() && link.neighbours.iter().any(|&x| label_of(x) != label_of(v));
+        if on_part_border && config.part_borders == PartBorders::Lock {
+            flags |= PINNED;
+        }
+        let border_weight = match config.part_borders {
+            PartBorders::Constrain(w) if on_part_border && w > 0.0 => Some(w),
+            _ => None,
+        };
+        let boundary_weight = (on_boundary && config.boundary_weight > 0.0).then_some(config.boundary_weight);
+
+        for (pose, positions) in self.poses.iter().enumerate() {
+            let mut q = Quadric::default();
+            let pv = &positions[v as usize];
+            for &f in my_faces {
+                let face = faces[f as usize];
+                let [p0, p1, p2] = face.map(|x| positions[x as usize]);
+                match self.face_quadrics {
+                    Some(fq) if pose == 0 => q += &fq[f as usize],
+                    _ => q += &Quadric::from_triangle(&p0, &p1, &p2),
                 }
-                if let Some(w) = border_weight
-                    && label_of(x) != label_of(v)
-                    && w > 0.0
-                {
-                    q += &Quadric::edge_constraint(pv, px, &cross, w);
+                if boundary_weight.is_none() && border_weight.is_none() {
+                    continue;
+                }
+                let cross = (p1 - p0).cross(&(p2 - p0));
+                for x in others(face, v) {
+                    let px = &positions[x as usize];
+                    if let Some(w) = boundary_weight {
+                        let i = link.neighbours.iter().position(|&n| n == x).expect("collected above");
+                        if link.counts[i] == 1 {
+                            q += &Quadric::edge_constraint(pv, px, &cross, w);
+                        }
+                    }
+                    if let Some(w) = border_weight
+                        && label_of(x) != label_of(v)
+                    {
+                        q += &Quadric::edge_constraint(pv, px, &cross, w);
+                    }
                 }
             }
+            out.quadrics.push(q);
         }
-        out.quadrics.push(q);
+        out.flags.push(flags);
     }
-    out.flags.push(flags);
 }
 
 /// The two vertices of `face` other than `v`, in face order after `v`.
