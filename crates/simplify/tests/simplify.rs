@@ -471,13 +471,8 @@ fn lindstrom_turk_preserves_enclosed_volume() {
 /// paper's 2500 vertices, and no non-manifold edge appears.
 #[test]
 fn scape_template_with_pinched_vertex_simplifies() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/datasets/scape");
-    let path = std::path::Path::new(dir).join("mesh000.ply");
-    if !path.exists() {
-        eprintln!("skipped: {} not found (SCAPE lives in ../shared/datasets)", path.display());
-        return;
-    }
-    let mesh = desal_io::read_mesh(&path).expect("SCAPE template reads");
+    let Some(dir) = desal_testdata::scape_dir() else { return };
+    let mesh = desal_io::read_mesh(&dir.join("mesh000.ply")).expect("SCAPE template reads");
     let runs = [Placement::Optimal, Placement::Subset]
         .into_iter()
         .flat_map(|placement| [Metric::Quadric, Metric::LindstromTurk].map(|metric| (placement, metric)));
