@@ -330,6 +330,13 @@ struct EdgeCosts {
     costs: Vec<f64>,
 }
 
+/// An input face's unnormalised normal and its length (one cache line holds two).
+#[derive(Debug, Clone, Copy)]
+struct InputNormal {
+    normal: Vec3,
+    length: f64,
+}
+
 /// Settings the inner loop reads, derived once from the config.
 #[derive(Debug)]
 struct Params {
@@ -359,9 +366,10 @@ struct Engine {
     /// cheap neighbour.
     weights: Option<Vec<f64>>,
     faces: Vec<[u32; 3]>,
-    /// Unnormalised normal of every input face in the template: a collapse may not turn
-    /// a face past the threshold from it either, since small steps add up.
-    input_normals: Vec<Vec3>,
+    /// Unnormalised normal of every input face in the template and its length: a
+    /// collapse may not turn a face past the threshold from it either, since small
+    /// steps add up.
+    input_normals: Vec<InputNormal>,
     face_alive: Vec<bool>,
     face_start: Vec<u32>,
     face_len: Vec<u32>,
@@ -418,7 +426,7 @@ impl Engine {
         // Each face's plane quadric once (a vertex sums those of its faces), and its
         // input normal. Several poses would need one quadric per face and pose: those
         // are computed where they are summed instead.
-        let (face_quadrics, input_normals): (Vec<Quadric>, Vec<Vec3>) = faces
+        let (face_quadrics, input_normals): (Vec<Quadric>, Vec<InputNormal>) = faces
             .par_iter()
             .map(|f| {
                 let quadric = if pose_count == 1 {
@@ -428,7 +436,8 @@ impl Engine {
                     Quadric::default()
                 };
                 let [a, b, c] = f.map(|v| mesh.positions[v as usize]);
-                (quadric, (b - a).cross(&(c - a)))
+                let normal = (b - a).cross(&(c - a));
+                (quadric, InputNormal { normal, length: normal.norm() })
             })
             .unzip();
         let context = ClassifyContext {
@@ -962,7 +971,7 @@ impl Engine {
                 return Err(Refusal::Flip);
             }
             let input = &self.input_normals[f as usize];
-            if new.dot(input) <= self.params.cos_max_rotation * input.norm() * twice_area {
+            if new.dot(&input.normal) <= self.params.cos_max_rotation * input.length * twice_area {
                 return Err(Refusal::Flip);
             }
         }
