@@ -4,10 +4,12 @@
 //! sensitive decimation") for quadrics summed over poses.
 //!
 //! The story, as [`run_engine`] tells it: classify every vertex and fill its quadric in
-//! one parallel pass; then, in passes until the target: list the live edges, cost them
-//! all in parallel, sort the cheap ones, choose in cost order those that share no
-//! endpoint, and perform them, each re-checked against the safeguards (link condition,
-//! fold-over, degeneracy); finally compact the survivors into the output mesh.
+//! one parallel pass; then, in passes until the target: list the live edges, cost in
+//! parallel those with an endpoint changed by the last pass (the others keep their
+//! cost: the quadric cost depends on the endpoints alone), sort the cheap ones, choose
+//! in cost order those that share no endpoint, and perform them, each re-checked against
+//! the safeguards (link condition, fold-over, degeneracy); finally compact the survivors
+//! into the output mesh.
 //!
 //! Why passes and not a heap: the first version kept every edge in a binary heap with
 //! lazy invalidation (stamps per vertex); profiling on SCAPE showed the loop stalled on
