@@ -120,6 +120,11 @@ pub struct SimplifyArgs {
     /// `--saliency` is given (the paper's method) and off otherwise (plain QSlim).
     #[arg(long)]
     pub no_balance: bool,
+    /// The error the collapses minimise: `quadric` (Garland–Heckbert, the paper's Q) or
+    /// `lindstrom-turk` (memoryless volume and boundary preservation, CGAL's default;
+    /// lower surface error on a single mesh, see BENCHMARKS.md).
+    #[arg(long, value_enum, default_value_t = MetricArg::Quadric)]
+    pub metric: MetricArg,
     /// Run the simplification this many times and print SIMPLIFY_SECONDS=<best>
     /// (simplification alone, no I/O), for the peers' benchmark harness.
     #[arg(long)]
@@ -130,6 +135,12 @@ pub struct SimplifyArgs {
 pub enum PlacementArg {
     Optimal,
     Subset,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum MetricArg {
+    Quadric,
+    LindstromTurk,
 }
 
 fn read<T: ArtifactBody>(path: &Path) -> Result<(T, desal_io::ContentHash)> {
@@ -231,7 +242,7 @@ pub fn map(args: &MapArgs) -> Result<()> {
 }
 
 pub fn simplify(args: &SimplifyArgs) -> Result<()> {
-    use desal_simplify::{Placement, SimplifyConfig, SimplifyInput, Target};
+    use desal_simplify::{Metric, Placement, SimplifyConfig, SimplifyInput, Target};
     let mesh = desal_io::read_mesh(&args.input)?;
     let weights = match &args.saliency {
         Some(path) => Some(read_weights(path, args.floor, mesh.vertex_count())?),
@@ -251,6 +262,10 @@ pub fn simplify(args: &SimplifyArgs) -> Result<()> {
         },
         saliency: weights.is_some(),
         balance: weights.is_some() && !args.no_balance,
+        metric: match args.metric {
+            MetricArg::Quadric => Metric::Quadric,
+            MetricArg::LindstromTurk => Metric::LindstromTurk,
+        },
         ..SimplifyConfig::default()
     };
     let mut input = SimplifyInput::new(&mesh);

@@ -188,4 +188,20 @@ fn simplify_binary_takes_plain_files_and_refuses_a_saliency_of_the_wrong_length(
         "{err}"
     );
     assert!(!output.exists(), "no partial output");
+
+    // The metric switch reaches the simplifier: Lindstrom–Turk places vertices by a
+    // different rule, so the same target gives other positions.
+    let quadric = dir.path().join("quadric.ply");
+    let lt = dir.path().join("lt.ply");
+    for (path, metric) in [(&quadric, "quadric"), (&lt, "lindstrom-turk")] {
+        let out = Command::new(&exe)
+            .args(["--input", input.to_str().unwrap(), "--output", path.to_str().unwrap()])
+            .args(["--target-vertices", "40", "--metric", metric])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
+    let (quadric, lt) = (desal_io::read_mesh(&quadric).unwrap(), desal_io::read_mesh(&lt).unwrap());
+    assert_eq!((quadric.vertex_count(), lt.vertex_count()), (40, 40));
+    assert_ne!(quadric.positions, lt.positions);
 }
