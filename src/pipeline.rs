@@ -119,6 +119,9 @@ pub struct SimplifyParams {
     pub balance: bool,
     /// Keep part borders (lock vertices on the border between two parts).
     pub keep_part_borders: bool,
+    /// `quadric` (Garland–Heckbert, the paper's) or `lindstrom-turk` (memoryless,
+    /// CGAL's default; lower surface error on one mesh, see BENCHMARKS.md).
+    pub metric: String,
 }
 
 impl Default for SimplifyParams {
@@ -131,6 +134,7 @@ impl Default for SimplifyParams {
             saliency: true,
             balance: true,
             keep_part_borders: false,
+            metric: "quadric".into(),
         }
     }
 }

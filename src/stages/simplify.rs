@@ -4,7 +4,7 @@
 use anyhow::{Result, bail};
 use desal_io::artifact::{ArtifactKind, ContentHash, SimplifiedV1};
 use desal_mesh::{PartLabels, TriMesh, Vec3};
-use desal_simplify::{PartBorders, Placement, SimplifyConfig, SimplifyInput, StopReason, Target};
+use desal_simplify::{Metric, PartBorders, Placement, SimplifyConfig, SimplifyInput, StopReason, Target};
 use serde_json::json;
 
 use crate::cache::StageKey;
@@ -29,12 +29,18 @@ pub fn config(params: &SimplifyParams) -> Result<SimplifyConfig> {
         "subset" => Placement::Subset,
         other => bail!("simplify.placement '{other}' is unknown: use \"optimal\" or \"subset\""),
     };
+    let metric = match params.metric.as_str() {
+        "quadric" => Metric::Quadric,
+        "lindstrom-turk" => Metric::LindstromTurk,
+        other => bail!("simplify.metric '{other}' is unknown: use \"quadric\" or \"lindstrom-turk\""),
+    };
     let config = SimplifyConfig {
         target: target(params),
         placement,
         saliency: params.saliency,
         balance: params.balance,
         part_borders: if params.keep_part_borders { PartBorders::Lock } else { PartBorders::Ignore },
+        metric,
         ..SimplifyConfig::default()
     };
     config.validate()?;
@@ -71,6 +77,7 @@ pub fn key(
             "saliency": params.saliency,
             "balance": params.balance,
             "keep_part_borders": params.keep_part_borders,
+            "metric": params.metric,
         })),
         inputs,
     }
@@ -102,6 +109,7 @@ pub fn compute(
     let summary = json!({
         "method": method_name(params),
         "placement": params.placement,
+        "metric": params.metric,
         "input_vertices": r.input_vertices,
         "input_faces": r.input_faces,
         "output_vertices": r.output_vertices,
@@ -194,4 +202,22 @@ pub fn describe(s: &SimplifiedV1, out: &mut String) {
         kept,
         s.positions.len()
     );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metric_key_selects_the_cost_and_enters_the_cache_key() {
+        let quadric = SimplifyParams::default();
+        assert_eq!(config(&quadric).unwrap().metric, Metric::Quadric);
+        let lt = SimplifyParams { metric: "lindstrom-turk".into(), ..SimplifyParams::default() };
+        assert_eq!(config(&lt).unwrap().metric, Metric::LindstromTurk);
+        let hash = ContentHash::of(b"poses");
+        assert_ne!(key(&quadric, hash, hash, hash).hash(), key(&lt, hash, hash, hash).hash());
+        let typo = SimplifyParams { metric: "lindstrom".into(), ..SimplifyParams::default() };
+        let err = config(&typo).unwrap_err().to_string();
+        assert!(err.contains("simplify.metric 'lindstrom'"), "{err}");
+    }
 }
