@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use desal_io::artifact::{self, LabelsV1, PoseSetV1};
+use desal_io::artifact::{self, FitV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1};
 
 use crate::support::desal;
 
@@ -20,6 +20,77 @@ fn frozen_v1_fixtures_still_load() {
     assert_eq!(poses, fixture_pose_set());
     let (_, labels, _) = artifact::read_artifact::<LabelsV1>(&fixture("labels-v1.dsa")).unwrap();
     assert_eq!(labels, LabelsV1 { names: vec!["lower".into(), "upper".into()], labels: vec![0, 0, 1, 1] });
+    let (producer, fit, _) = artifact::read_artifact::<FitV1>(&fixture("fit-v1.dsa")).unwrap();
+    assert_eq!(producer.stage, "fit");
+    assert_eq!(fit, fixture_fit());
+    let (_, saliency, _) = artifact::read_artifact::<SaliencyV1>(&fixture("saliency-v1.dsa")).unwrap();
+    assert_eq!(saliency, fixture_saliency());
+    let (_, simplified, _) = artifact::read_artifact::<SimplifiedV1>(&fixture("simplified-v1.dsa")).unwrap();
+    assert_eq!(simplified, fixture_simplified());
+    let (_, map, _) = artifact::read_artifact::<MapV1>(&fixture("map-v1.dsa")).unwrap();
+    assert_eq!(map, fixture_map());
+}
+
+/// Stage 1 on the fixture pose set: pose 1 is pose 0 moved by +0.5 along x.
+fn fixture_fit() -> FitV1 {
+    let identity = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    FitV1 {
+        model: "rigid".into(),
+        pose_names: vec!["rest".into(), "moved".into()],
+        part_names: vec!["lower".into(), "upper".into()],
+        template: 0,
+        vertex_count: 4,
+        linear: vec![identity; 4],
+        translation: vec![[0.0; 3], [0.0; 3], [0.5, 0.0, 0.0], [0.5, 0.0, 0.0]],
+        rms: vec![0.0, 0.0, 0.25, 0.125],
+        mean: vec![0.0, 0.0, 0.25, 0.125],
+        max: vec![0.0, 0.0, 0.5, 0.25],
+        residuals: vec![0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.25, 0.0],
+        worst_parts: vec![(0, 0.25, 0.5, 1), (1, 0.125, 0.25, 1)],
+        worst_poses: vec![(1, 0.1875, 0.5, 0), (0, 0.0, 0.0, 0)],
+    }
+}
+
+fn fixture_saliency() -> SaliencyV1 {
+    SaliencyV1 {
+        saliency: vec![0.0, 1.0, 0.5, 0.0],
+        weights: vec![0.05, 1.0, 0.525, 0.05],
+        raw: vec![0.0, 0.5, 0.25, 0.0],
+        normaliser: 0.5,
+        distance: "plain".into(),
+        normalisation: "max".into(),
+        weight_floor: 0.05,
+        poses_used: vec!["moved".into()],
+        poses_excluded: vec![],
+        rigid: false,
+    }
+}
+
+fn fixture_simplified() -> SimplifiedV1 {
+    SimplifiedV1 {
+        positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.25, 0.5, 0.5]],
+        faces: vec![[0, 1, 2]],
+        simp_to_orig: vec![Some(0), Some(1), None],
+        placement: "optimal".into(),
+        input_vertices: 4,
+        input_faces: 4,
+        collapses: 1,
+        stop: "no-valid-collapse".into(),
+        max_error: 0.125,
+        mean_error: 0.125,
+        edge_length_mean: 0.875,
+        edge_length_variance: 0.0625,
+    }
+}
+
+fn fixture_map() -> MapV1 {
+    MapV1 {
+        simp_to_orig: vec![0, 1, 2],
+        faces: vec![[0, 1, 2]],
+        mode: "greedy".into(),
+        displacement_mean: 0.25,
+        displacement_max: 0.75,
+    }
 }
 
 fn fixture_pose_set() -> PoseSetV1 {
@@ -50,6 +121,14 @@ fn write_fixtures() {
     let labels = LabelsV1 { names: vec!["lower".into(), "upper".into()], labels: vec![0, 0, 1, 1] };
     let producer = artifact::Producer { stage: "labels".into(), ..producer };
     artifact::write_artifact(&fixture("labels-v1.dsa"), &producer, &labels).unwrap();
+    let producer = artifact::Producer { stage: "fit".into(), ..producer };
+    artifact::write_artifact(&fixture("fit-v1.dsa"), &producer, &fixture_fit()).unwrap();
+    let producer = artifact::Producer { stage: "saliency".into(), ..producer };
+    artifact::write_artifact(&fixture("saliency-v1.dsa"), &producer, &fixture_saliency()).unwrap();
+    let producer = artifact::Producer { stage: "simplify".into(), ..producer };
+    artifact::write_artifact(&fixture("simplified-v1.dsa"), &producer, &fixture_simplified()).unwrap();
+    let producer = artifact::Producer { stage: "map".into(), ..producer };
+    artifact::write_artifact(&fixture("map-v1.dsa"), &producer, &fixture_map()).unwrap();
 }
 
 #[test]
@@ -61,6 +140,14 @@ fn inspect_describes_an_artifact_and_refuses_a_foreign_file() {
         text.contains("pose-set (format version 1)") && text.contains("poses 2, vertices 4, faces 4"),
         "{text}"
     );
+    for kind in ["labels", "fit", "saliency", "simplified", "map"] {
+        let out = desal(&["inspect", fixture(&format!("{kind}-v1.dsa")).to_str().unwrap()]);
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success() && text.contains(&format!("{kind} (format version 1)")),
+            "{kind}: {text}"
+        );
+    }
     let out = desal(&["inspect", file!()]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("not a desal artifact"));
