@@ -194,6 +194,7 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
         let spec: DatasetToml = merged
             .try_into()
             .with_context(|| format!("{}: dataset #{} ({})", path.display(), k + 1, dataset_name(table)))?;
+        check_dataset_name(&spec.name).with_context(|| format!("{}: dataset #{}", path.display(), k + 1))?;
         if datasets.iter().any(|d: &Dataset| d.spec.name == spec.name) {
             bail!("{}: two datasets are named '{}'; names must be unique", path.display(), spec.name);
         }
@@ -204,6 +205,20 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
         datasets.push(Dataset { spec, pose_files, labels_file, out_dir });
     }
     Ok(Pipeline { path: path.to_owned(), out_root, datasets })
+}
+
+/// A dataset's name is its output sub-folder, so it must stay one plain folder name:
+/// letters, digits, `-`, `_` and `.`, not starting with `.` (no `..`, no hidden folder, no
+/// path that escapes the output root).
+fn check_dataset_name(name: &str) -> Result<()> {
+    let plain = |c: char| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.');
+    if name.is_empty() || name.starts_with('.') || !name.chars().all(plain) {
+        bail!(
+            "dataset name {name:?} cannot be a folder name: use letters, digits, '-', '_' and '.', \
+             not starting with '.'"
+        );
+    }
+    Ok(())
 }
 
 fn dataset_name(table: &toml::Table) -> String {
@@ -297,6 +312,16 @@ target_vertices = 50
         let bad = "schema = 1\n[[dataset]]\nname='a'\nposes=['x.ply']\nlabels='l'\ncolour='red'\n";
         let err = format!("{:#}", parse(p, bad, None).unwrap_err());
         assert!(err.contains("colour"), "{err}");
+    }
+
+    #[test]
+    fn dataset_names_stay_inside_the_output_root() {
+        let p = Path::new("x.toml");
+        for bad in ["../evil", "a/b", ".", "..", ".hidden", "", "a\\b"] {
+            let text = format!("schema = 1\n[[dataset]]\nname={bad:?}\nposes=['x.ply']\nlabels='l'\n");
+            let err = format!("{:#}", parse(p, &text, None).unwrap_err());
+            assert!(err.contains("cannot be a folder name"), "{bad}: {err}");
+        }
     }
 
     #[test]

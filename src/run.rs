@@ -265,6 +265,7 @@ fn run_dataset(
     bars: &Bars,
 ) -> Result<DatasetReport> {
     let start = Instant::now();
+    check_output_folder(&dataset.out_dir)?;
     let progress: StepProgress = bars.for_dataset(&dataset.spec.name);
     let mut runner = StageRunner { cache, dataset: &dataset.spec.name, options, bars, records: Vec::new() };
     let stages = crate::stages::run_stages(dataset, &mut runner, &progress)?;
@@ -347,9 +348,40 @@ impl std::fmt::Debug for DatasetOutputs {
     }
 }
 
+/// `desal eval`'s folder inside a dataset's output folder: kept when `desal run` replaces
+/// the rest (it depends on the pipeline's inputs, not on the run's stage parameters).
+const KEPT_SUBFOLDER: &str = "eval";
+
+/// Refuses to take over a folder that `desal run` did not write: the output folder is
+/// replaced whole, so a non-empty folder without a `report.json` (someone's own files, or
+/// a typo in `out` or `name`) would be lost.
+fn check_output_folder(out_dir: &Path) -> Result<()> {
+    if !out_dir.exists() {
+        return Ok(());
+    }
+    if !out_dir.is_dir() {
+        bail!(
+            "output folder {} exists and is not a folder; remove it or change `out`/`name`",
+            out_dir.display()
+        );
+    }
+    let mut entries = std::fs::read_dir(out_dir)
+        .with_context(|| format!("cannot read output folder {}", out_dir.display()))?;
+    if entries.next().is_some() && !out_dir.join("report.json").is_file() {
+        bail!(
+            "output folder {} is not empty and holds no report.json, so desal did not write it; \
+             desal replaces its output folder whole: move those files away or change `out`/`name`",
+            out_dir.display()
+        );
+    }
+    Ok(())
+}
+
 /// Writes the outputs into a temp folder beside `out_dir`, then swaps it into place, so
-/// the folder is either the previous run's or this run's, never a mix.
+/// the folder is either the previous run's or this run's, never a mix. `desal eval`'s
+/// `eval/` subfolder is carried over into the new folder.
 fn write_outputs(out_dir: &Path, outputs: DatasetOutputs, report: &DatasetReport) -> Result<()> {
+    check_output_folder(out_dir)?;
     let parent = out_dir.parent().context("output folder has no parent")?;
     let name = out_dir.file_name().context("output folder has no name")?.to_string_lossy().into_owned();
     std::fs::create_dir_all(parent).with_context(|| format!("cannot create {}", parent.display()))?;
@@ -380,6 +412,17 @@ fn write_outputs(out_dir: &Path, outputs: DatasetOutputs, report: &DatasetReport
     }
     std::fs::rename(&tmp, out_dir)
         .with_context(|| format!("cannot move outputs into {}", out_dir.display()))?;
+    let kept = old.join(KEPT_SUBFOLDER);
+    if kept.is_dir() {
+        // On failure the previous folder stays (as `old`) rather than lose `eval/`.
+        std::fs::rename(&kept, out_dir.join(KEPT_SUBFOLDER)).with_context(|| {
+            format!(
+                "cannot carry {} over; the previous outputs are kept in {}",
+                KEPT_SUBFOLDER,
+                old.display()
+            )
+        })?;
+    }
     let _ = std::fs::remove_dir_all(&old);
     Ok(())
 }

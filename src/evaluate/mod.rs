@@ -14,8 +14,8 @@
 //!    every deformed mesh and the vertex-count sweep ([`sweep`]) into a temporary
 //!    folder, which then replaces `<out>/<dataset>/eval` whole.
 //!
-//! Note: `desal run` replaces `<out>/<dataset>` whole when its own outputs change, which
-//! removes a previous `eval/` folder with it; run `desal eval` again afterwards.
+//! `desal run` replaces `<out>/<dataset>` whole when its own outputs change but carries
+//! the `eval/` folder over (`run::KEPT_SUBFOLDER`).
 
 pub mod figures;
 pub mod measure;

@@ -205,3 +205,30 @@ fn simplify_binary_takes_plain_files_and_refuses_a_saliency_of_the_wrong_length(
     assert_eq!((quadric.vertex_count(), lt.vertex_count()), (40, 40));
     assert_ne!(quadric.positions, lt.positions);
 }
+
+#[test]
+fn run_never_takes_over_a_folder_it_did_not_write_and_keeps_eval() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = write_tube_dataset(dir.path(), "");
+    // Someone's own files where the dataset's outputs would go: refused, untouched.
+    let out_dir = dir.path().join("out/tube");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    std::fs::write(out_dir.join("thesis.tex"), "mine").unwrap();
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("holds no report.json"), "{}", stderr(&out));
+    assert_eq!(std::fs::read_to_string(out_dir.join("thesis.tex")).unwrap(), "mine");
+    std::fs::remove_file(out_dir.join("thesis.tex")).unwrap();
+
+    // desal eval's folder survives a run whose outputs change.
+    run_ok(&pipeline, &[]);
+    std::fs::create_dir_all(out_dir.join("eval")).unwrap();
+    std::fs::write(out_dir.join("eval/eval.md"), "table").unwrap();
+    let text = std::fs::read_to_string(&pipeline).unwrap();
+    std::fs::write(&pipeline, format!("{text}[dataset.simplify]\nratio = 0.5\n")).unwrap();
+    let report = run_ok(&pipeline, &[]);
+    assert!(
+        report["stages"].as_array().unwrap().iter().any(|s| s["name"] == "simplify" && s["cached"] == false)
+    );
+    assert_eq!(std::fs::read_to_string(out_dir.join("eval/eval.md")).unwrap(), "table");
+}
