@@ -8,12 +8,13 @@ use thiserror::Error;
 
 #[derive(Debug, Error)]
 pub enum IoError {
-    /// The OS refused to open, read or write the file.
-    #[error("{path}: {source}")]
-    Io { path: PathBuf, source: std::io::Error },
+    /// The OS refused to open, read or write the file. (`cause`, not `source`: the
+    /// message already carries it, so an error chain must not print it twice.)
+    #[error("{path}: {cause}")]
+    Io { path: PathBuf, cause: std::io::Error },
 
     /// The extension is not one desal reads.
-    #[error("{path}: unsupported mesh format '.{extension}' (desal reads .ply and .obj)")]
+    #[error("{path}: unsupported mesh format '.{extension}' (desal reads .ply, .obj and .off)")]
     UnsupportedFormat { path: PathBuf, extension: String },
 
     /// The file is not a well-formed mesh file (bad header, truncated payload, missing
@@ -22,8 +23,8 @@ pub enum IoError {
     BadMesh { path: PathBuf, reason: String },
 
     /// The file parsed but its content is invalid (face index out of range, NaN, ...).
-    #[error("{path}: {source}")]
-    InvalidMesh { path: PathBuf, source: MeshError },
+    #[error("{path}: {cause}")]
+    InvalidMesh { path: PathBuf, cause: MeshError },
 
     /// A line of a text file (OBJ, labels) could not be parsed.
     #[error("{path}:{line}: {reason}")]
@@ -74,7 +75,7 @@ pub enum IoError {
 
 impl IoError {
     pub(crate) fn io(path: &std::path::Path, source: std::io::Error) -> Self {
-        IoError::Io { path: path.to_owned(), source }
+        IoError::Io { path: path.to_owned(), cause: source }
     }
 
     pub(crate) fn bad_mesh(path: &std::path::Path, reason: impl Into<String>) -> Self {

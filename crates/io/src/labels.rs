@@ -23,9 +23,10 @@ pub fn read_labels(path: &Path) -> Result<PartLabels, IoError> {
         let parsed: LabelsJson = serde_json::from_str(&text)
             .map_err(|e| IoError::Json { path: path.to_owned(), reason: e.to_string() })?;
         return PartLabels::try_new(parsed.labels, parsed.parts)
-            .map_err(|source| IoError::InvalidMesh { path: path.to_owned(), source });
+            .map_err(|cause| IoError::InvalidMesh { path: path.to_owned(), cause });
     }
     let mut labels = Vec::new();
+    let mut lines = Vec::new();
     let mut names: Vec<(u32, String)> = Vec::new();
     for (i, raw) in text.lines().enumerate() {
         let line = raw.trim();
@@ -42,7 +43,9 @@ pub fn read_labels(path: &Path) -> Result<PartLabels, IoError> {
             reason: format!("'{line}' is not a part id (a non-negative integer)"),
         })?;
         labels.push(id);
+        lines.push(i + 1);
     }
+    check_part_ids(path, &labels, &lines, &names)?;
     let mut result = PartLabels::from_ids(labels);
     for (id, name) in names {
         if let Some(slot) = result.names.get_mut(id as usize) {
@@ -50,6 +53,47 @@ pub fn read_labels(path: &Path) -> Result<PartLabels, IoError> {
         }
     }
     Ok(result)
+}
+
+/// Text labels carry no part count, so it is inferred: the parts named in a `# ids:`
+/// comment, else `0..=max id` with every id in use. An id outside that range is a typo
+/// (or a foreign file) and is reported with its line, before anything is allocated for it.
+fn check_part_ids(
+    path: &Path,
+    labels: &[u32],
+    lines: &[usize],
+    names: &[(u32, String)],
+) -> Result<(), IoError> {
+    let bad = |k: usize, reason: String| IoError::BadLine { path: path.to_owned(), line: lines[k], reason };
+    if let Some(count) = names.iter().map(|(id, _)| *id as usize + 1).max() {
+        if let Some(k) = labels.iter().position(|&id| id as usize >= count) {
+            return Err(bad(
+                k,
+                format!(
+                    "vertex {k} has part id {}, but the '# ids:' comment names parts 0..{} only",
+                    labels[k],
+                    count - 1
+                ),
+            ));
+        }
+        return Ok(());
+    }
+    let mut used: Vec<u32> = labels.to_vec();
+    used.sort_unstable();
+    used.dedup();
+    if let Some(gap) = used.iter().enumerate().position(|(k, &id)| id as usize != k) {
+        let k = labels.iter().position(|&id| id == used[gap]).expect("a used id");
+        return Err(bad(
+            k,
+            format!(
+                "vertex {k} has part id {}, but no vertex has part id {gap}: part ids must be 0..N-1 \
+                 with every id used (name the parts in a '# ids: 0=name, 1=name' comment to allow \
+                 empty ones)",
+                labels[k]
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Names from a comment like ` ids: 0=lefthand, 1=leftlowerarm`.

@@ -85,5 +85,5 @@ pub fn read_off(path: &Path) -> Result<TriMesh, IoError> {
         return Err(IoError::bad_mesh(path, "no faces: not a mesh"));
     }
     TriMesh::try_new(positions, faces, &path.display().to_string())
-        .map_err(|source| IoError::InvalidMesh { path: path.to_owned(), source })
+        .map_err(|cause| IoError::InvalidMesh { path: path.to_owned(), cause })
 }

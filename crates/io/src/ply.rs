@@ -131,7 +131,7 @@ pub fn read_ply_full(path: &Path) -> Result<PlyMesh, IoError> {
         .collect();
     let stem = path.display().to_string();
     let mesh = TriMesh::try_new(positions, faces, &stem)
-        .map_err(|source| IoError::InvalidMesh { path: path.to_owned(), source })?;
+        .map_err(|cause| IoError::InvalidMesh { path: path.to_owned(), cause })?;
     Ok(PlyMesh { mesh, scalars })
 }
 

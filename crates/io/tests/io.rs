@@ -151,6 +151,23 @@ fn labels_read_from_text_and_json() {
     assert!(desal_io::labels::read_labels(&txt).unwrap_err().to_string().contains("l.txt:2"));
 }
 
+#[test]
+fn text_labels_with_an_out_of_range_id_name_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let txt = dir.path().join("l.txt");
+    // Named parts: an id beyond them is refused.
+    std::fs::write(&txt, "# ids: 0=head, 1=hand\n0\n1\n99\n").unwrap();
+    let err = desal_io::labels::read_labels(&txt).unwrap_err().to_string();
+    assert!(err.contains("l.txt:4") && err.contains("part id 99") && err.contains("0..1"), "{err}");
+    // Unnamed parts: ids must be 0..N-1, all used; a huge id is refused before any
+    // allocation for it.
+    std::fs::write(&txt, "0\n1\n4000000000\n1\n").unwrap();
+    let err = desal_io::labels::read_labels(&txt).unwrap_err().to_string();
+    assert!(err.contains("l.txt:3") && err.contains("no vertex has part id 2"), "{err}");
+    std::fs::write(&txt, "1\n0\n1\n").unwrap();
+    assert_eq!(desal_io::labels::read_labels(&txt).unwrap().names, vec!["part0", "part1"]);
+}
+
 fn producer() -> Producer {
     Producer {
         stage: "ingest".into(),

@@ -31,7 +31,9 @@ pub enum MeshError {
 
     /// A pose's own triangle list differs from the template's.
     #[error(
-        "pose '{pose}' has a different triangle list from the template: first difference at face {face} ({found:?} vs template {expected:?}); set `ignore_pose_faces = true` to use the template's triangles for every pose"
+        "pose '{pose}' has a different triangle list from the template: first difference at face {face} ({} vs the template's {}); set `ignore_pose_faces = true` to use the template's triangles for every pose",
+        describe_face(found),
+        describe_face(expected)
     )]
     FaceMismatch { pose: String, face: usize, expected: Option<[u32; 3]>, found: Option<[u32; 3]> },
 
@@ -54,4 +56,12 @@ pub enum MeshError {
         "part {part} ('{name}') has {vertices} vertices that do not span a plane (fewer than 3, or all collinear); a rigid fit needs 3 non-collinear vertices per part — merge it into a neighbouring part"
     )]
     DegeneratePart { part: u32, name: String, vertices: usize },
+}
+
+/// `[a, b, c]`, or `no face` past the end of a shorter list.
+fn describe_face(face: &Option<[u32; 3]>) -> String {
+    match face {
+        Some([a, b, c]) => format!("[{a}, {b}, {c}]"),
+        None => "no face".into(),
+    }
 }

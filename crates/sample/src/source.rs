@@ -74,7 +74,7 @@ impl SourceAssets {
 
 fn read_text(path: &Path) -> Result<String, SampleError> {
     std::fs::read_to_string(path)
-        .map_err(|source| SampleError::Io(desal_io::IoError::Io { path: path.to_owned(), source }))
+        .map_err(|cause| SampleError::Io(desal_io::IoError::Io { path: path.to_owned(), cause }))
 }
 
 fn json_error(path: &Path, e: impl std::fmt::Display) -> SampleError {
