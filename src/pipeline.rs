@@ -101,12 +101,15 @@ impl Default for SaliencyParams {
     }
 }
 
+/// The keys of `[simplify]` that name its target; at most one may be given.
+const TARGET_KEYS: [&str; 3] = ["target_vertices", "target_faces", "ratio"];
+
 /// Stage 3 parameters.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct SimplifyParams {
-    /// Target vertex count (the paper: 2500). One of the three targets is used, in the
-    /// order vertices, faces, ratio.
+    /// Target vertex count (the paper: 2500). At most one of the three targets is
+    /// given; none means `ratio = 0.2`.
     pub target_vertices: Option<usize>,
     pub target_faces: Option<usize>,
     /// Target as a fraction of the input face count.
@@ -129,7 +132,7 @@ impl Default for SimplifyParams {
         SimplifyParams {
             target_vertices: None,
             target_faces: None,
-            ratio: Some(0.2),
+            ratio: None,
             placement: "optimal".into(),
             saliency: true,
             balance: true,
@@ -195,6 +198,10 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
             .try_into()
             .with_context(|| format!("{}: dataset #{} ({})", path.display(), k + 1, dataset_name(table)))?;
         check_dataset_name(&spec.name).with_context(|| format!("{}: dataset #{}", path.display(), k + 1))?;
+        // Stage parameters are checked now, before any stage runs.
+        crate::stages::fit::config(&spec.fit)
+            .and(crate::stages::simplify::config(&spec.simplify).map(drop))
+            .with_context(|| format!("{}: dataset '{}'", path.display(), spec.name))?;
         if datasets.iter().any(|d: &Dataset| d.spec.name == spec.name) {
             bail!("{}: two datasets are named '{}'; names must be unique", path.display(), spec.name);
         }
@@ -228,6 +235,11 @@ fn dataset_name(table: &toml::Table) -> String {
 /// `defaults` overlaid by `table`, merging nested tables key by key.
 fn merge(defaults: &toml::Table, table: &toml::Table) -> toml::Table {
     let mut out = defaults.clone();
+    // The three simplify targets are alternatives: a dataset's target replaces the
+    // defaults' target, whichever key each uses.
+    if TARGET_KEYS.iter().any(|k| table.contains_key(*k)) {
+        out.retain(|k, _| !TARGET_KEYS.contains(&k));
+    }
     for (key, value) in table {
         match (out.get_mut(key), value) {
             (Some(toml::Value::Table(base)), toml::Value::Table(over)) => {
@@ -322,6 +334,18 @@ target_vertices = 50
             let err = format!("{:#}", parse(p, &text, None).unwrap_err());
             assert!(err.contains("cannot be a folder name"), "{bad}: {err}");
         }
+    }
+
+    #[test]
+    fn a_dataset_target_replaces_the_defaults_target_and_two_in_one_table_are_refused() {
+        let p = Path::new("x.toml");
+        let head = "schema = 1\n[defaults.simplify]\nratio = 0.5\n[[dataset]]\nname='a'\nposes=['x.ply']\nlabels='l'\n";
+        let text = format!("{head}[dataset.simplify]\ntarget_vertices = 100\n");
+        let d = &parse(p, &text, None).unwrap().datasets[0];
+        assert_eq!((d.spec.simplify.target_vertices, d.spec.simplify.ratio), (Some(100), None));
+        let text = format!("{head}[dataset.simplify]\ntarget_vertices = 100\ntarget_faces = 200\n");
+        let err = format!("{:#}", parse(p, &text, None).unwrap_err());
+        assert!(err.contains("dataset 'a'") && err.contains("not several"), "{err}");
     }
 
     #[test]

@@ -24,6 +24,18 @@ pub fn target(params: &SimplifyParams) -> Target {
 }
 
 pub fn config(params: &SimplifyParams) -> Result<SimplifyConfig> {
+    let given = [params.target_vertices.is_some(), params.target_faces.is_some(), params.ratio.is_some()];
+    if given.iter().filter(|&&g| g).count() > 1 {
+        bail!("simplify: give one of target_vertices, target_faces and ratio, not several");
+    }
+    match target(params) {
+        Target::Vertices(n) | Target::Faces(n) if n < 4 => {
+            bail!(
+                "simplify: a target of {n} is too small: the simplest closed surface has 4 vertices and 4 faces"
+            )
+        }
+        _ => {}
+    }
     let placement = match params.placement.as_str() {
         "optimal" => Placement::Optimal,
         "subset" => Placement::Subset,
@@ -209,13 +221,18 @@ mod tests {
     use super::*;
 
     #[test]
-    fn metric_key_selects_the_cost_and_enters_the_cache_key() {
+    fn parameters_are_checked_and_the_metric_enters_the_cache_key() {
         let quadric = SimplifyParams::default();
         assert_eq!(config(&quadric).unwrap().metric, Metric::Quadric);
         let lt = SimplifyParams { metric: "lindstrom-turk".into(), ..SimplifyParams::default() };
         assert_eq!(config(&lt).unwrap().metric, Metric::LindstromTurk);
         let hash = ContentHash::of(b"poses");
         assert_ne!(key(&quadric, hash, hash, hash).hash(), key(&lt, hash, hash, hash).hash());
+        let two =
+            SimplifyParams { target_vertices: Some(100), ratio: Some(0.5), ..SimplifyParams::default() };
+        assert!(config(&two).unwrap_err().to_string().contains("not several"));
+        let zero = SimplifyParams { target_vertices: Some(0), ..SimplifyParams::default() };
+        assert!(config(&zero).unwrap_err().to_string().contains("too small"));
         let typo = SimplifyParams { metric: "lindstrom".into(), ..SimplifyParams::default() };
         let err = config(&typo).unwrap_err().to_string();
         assert!(err.contains("simplify.metric 'lindstrom'"), "{err}");
