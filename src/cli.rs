@@ -226,7 +226,8 @@ pub fn map(args: &MapArgs) -> Result<()> {
         // greedy rule maps it, exactly as for optimal placement.
         let bytes = std::fs::read(&args.simplified)
             .with_context(|| format!("cannot read {}", args.simplified.display()))?;
-        let mesh = desal_io::read_mesh(&args.simplified)?;
+        let mut mesh = desal_io::read_mesh(&args.simplified)?;
+        mesh.faces = crate::ingest::clean_faces_with_warnings(&args.simplified, &mesh.faces).0;
         (stages::simplify::external(&mesh), desal_io::ContentHash::of(&bytes))
     };
     let key = stages::map::key(poses_hash, simplified_hash);
@@ -243,7 +244,8 @@ pub fn map(args: &MapArgs) -> Result<()> {
 
 pub fn simplify(args: &SimplifyArgs) -> Result<()> {
     use desal_simplify::{Metric, Placement, SimplifyConfig, SimplifyInput, Target};
-    let mesh = desal_io::read_mesh(&args.input)?;
+    let mut mesh = desal_io::read_mesh(&args.input)?;
+    mesh.faces = crate::ingest::clean_faces_with_warnings(&args.input, &mesh.faces).0;
     let weights = match &args.saliency {
         Some(path) => Some(read_weights(path, args.floor, mesh.vertex_count())?),
         None => None,

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use desal_io::ContentHash;
 use desal_mesh::validate::{check_same_faces, clean_faces};
+use desal_mesh::{Face, FaceCleanup};
 use desal_mesh::{PartLabels, PoseSet, Progress, TriMesh};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -107,23 +108,7 @@ pub fn ingest_poses(
             })?;
         }
     }
-    let (faces, cleanup) = clean_faces(&template_mesh.faces);
-    if !cleanup.degenerate.is_empty() {
-        eprintln!(
-            "warning: {}: removed {} degenerate face(s) (a repeated vertex), e.g. face {}",
-            template_file.display(),
-            cleanup.degenerate.len(),
-            cleanup.degenerate[0]
-        );
-    }
-    if !cleanup.duplicate.is_empty() {
-        eprintln!(
-            "warning: {}: removed {} duplicate face(s) (same vertices as an earlier face), e.g. face {}",
-            template_file.display(),
-            cleanup.duplicate.len(),
-            cleanup.duplicate[0]
-        );
-    }
+    let (faces, cleanup) = clean_faces_with_warnings(template_file, &template_mesh.faces);
     let names: Vec<String> = files.iter().map(|f| pose_name(f)).collect();
     if let Some((i, name)) = names.iter().enumerate().find(|(i, n)| names[..*i].contains(n)) {
         bail!(
@@ -158,4 +143,27 @@ pub fn ingest_labels(path: &Path, set: &PoseSet) -> Result<PartLabels> {
         format!("{}: part labels against the template '{}'", path.display(), set.names[set.template])
     })?;
     Ok(labels)
+}
+
+/// Removes degenerate (a repeated vertex) and duplicate (an earlier face's vertices)
+/// faces, warning on stderr with the file and a face index: never silently.
+pub fn clean_faces_with_warnings(file: &Path, faces: &[Face]) -> (Vec<Face>, FaceCleanup) {
+    let (kept, cleanup) = clean_faces(faces);
+    if !cleanup.degenerate.is_empty() {
+        eprintln!(
+            "warning: {}: removed {} degenerate face(s) (a repeated vertex), e.g. face {}",
+            file.display(),
+            cleanup.degenerate.len(),
+            cleanup.degenerate[0]
+        );
+    }
+    if !cleanup.duplicate.is_empty() {
+        eprintln!(
+            "warning: {}: removed {} duplicate face(s) (same vertices as an earlier face), e.g. face {}",
+            file.display(),
+            cleanup.duplicate.len(),
+            cleanup.duplicate[0]
+        );
+    }
+    (kept, cleanup)
 }

@@ -24,11 +24,46 @@ pub fn key(poses: ContentHash, simplified: ContentHash) -> StageKey {
 
 /// Maps the simplified template to original vertices: exactly, when every simplified
 /// vertex is an original one (subset placement); by the paper's greedy rule otherwise.
+/// A mapped vertex this far (mean, as a fraction of the template's bounding-box
+/// diagonal) from its original vertex means the simplified mesh is of another template:
+/// desal's own and the peers' simplifications at SCAPE's 2500 vertices are at 0.2 %.
+const MAX_MEAN_DISPLACEMENT: f64 = 0.05;
+
+/// Refuses a stage-3 result made from another pose set: its input vertex count and the
+/// exact positions of its kept original vertices must be the template's.
+fn check_made_from(simplified: &SimplifiedV1, set: &PoseSet) -> Result<()> {
+    if simplified.placement == "external" {
+        return Ok(());
+    }
+    let template = set.template_positions();
+    if simplified.input_vertices as usize != template.len() {
+        bail!(
+            "the simplified template was made from a mesh of {} vertices, but this template has {}: \
+             it belongs to another pose set",
+            simplified.input_vertices,
+            template.len()
+        );
+    }
+    for (s, (p, o)) in simplified.positions.iter().zip(&simplified.simp_to_orig).enumerate() {
+        if let Some(o) = *o {
+            let original = template.get(o as usize).map(|q| [q.x, q.y, q.z]);
+            if original != Some(*p) {
+                bail!(
+                    "simplified vertex {s} claims to be original vertex {o}, but that vertex of this \
+                     template is elsewhere: the simplified template belongs to another pose set"
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
 pub fn compute(
     simplified: &SimplifiedV1,
     set: &PoseSet,
     labels: &PartLabels,
 ) -> Result<(MapV1, serde_json::Value, String)> {
+    check_made_from(simplified, set)?;
     let mesh = super::simplify::mesh(simplified);
     let kept: Option<Vec<u32>> = simplified.simp_to_orig.iter().copied().collect();
     let mode = match &kept {
@@ -37,6 +72,18 @@ pub fn compute(
     };
     let out = desal_map::map_pose_set(&MapConfig::default(), mode, &mesh, set, labels)?;
     let r = &out.report;
+    let diagonal =
+        desal_mesh::math::bounding_box(set.template_positions()).map_or(0.0, |(lo, hi)| (hi - lo).norm());
+    if r.displacement.mean > MAX_MEAN_DISPLACEMENT * diagonal {
+        bail!(
+            "the simplified mesh does not lie on this template: its vertices are {:.3e} from their \
+             mapped original vertices on average ({:.1} % of the template's diagonal; a simplification \
+             of it is within a fraction of a percent) — is it a simplification of this template, in \
+             the same units and pose?",
+            r.displacement.mean,
+            100.0 * r.displacement.mean / diagonal
+        );
+    }
     if !r.empty_parts.is_empty() {
         let names: Vec<&str> = r.empty_parts.iter().map(|&p| labels.names[p as usize].as_str()).collect();
         eprintln!(

@@ -232,3 +232,27 @@ fn run_never_takes_over_a_folder_it_did_not_write_and_keeps_eval() {
     );
     assert_eq!(std::fs::read_to_string(out_dir.join("eval/eval.md")).unwrap(), "table");
 }
+
+#[test]
+fn map_refuses_a_simplified_template_of_another_pose_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a");
+    let b = dir.path().join("b");
+    run_ok(
+        &write_tube_dataset(&a, "[dataset.simplify]\nplacement = \"subset\"\ntarget_vertices = 60\n"),
+        &[],
+    );
+    // The same vertex count, another template (a bent pose).
+    run_ok(&write_tube_dataset(&b, "template = \"p2\"\n"), &[]);
+    let p = |dir: &Path, name: &str| dir.join("out/tube").join(name).to_str().unwrap().to_owned();
+    let output = dir.path().join("map.dsa");
+    let exe = Path::new(env!("CARGO_BIN_EXE_desal")).with_file_name("desal-map");
+    let out = Command::new(exe)
+        .args(["--poses", &p(&b, "poses.dsa"), "--labels", &p(&b, "labels.dsa")])
+        .args(["--simplified", &p(&a, "simplified.dsa"), "-o", output.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("belongs to another pose set"), "{}", stderr(&out));
+    assert!(!output.exists());
+}
