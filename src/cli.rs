@@ -234,10 +234,12 @@ pub fn map(args: &MapArgs) -> Result<()> {
     let (body, _, note) = stages::map::compute(&simplified, &set, &labels)
         .with_context(|| format!("mapping {} onto {}", args.simplified.display(), args.poses.display()))?;
     let (simple_set, simple_labels) = stages::map::apply(&body, &set, &labels)?;
-    artifact::write_artifact(&args.output, &key.producer(&[]), &body)?;
+    // The folder first: it is the step that fails on a bad path, and then no artifact
+    // claims a result that was not written.
     if let Some(dir) = &args.out_dir {
         stages::map::write_pose_set(dir, &body, &simple_set, &simple_labels)?;
     }
+    artifact::write_artifact(&args.output, &key.producer(&[]), &body)?;
     done(&note, &args.output);
     Ok(())
 }

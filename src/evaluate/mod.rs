@@ -95,6 +95,12 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
     if args.target_vertices == Some(0) || (args.sweep && args.sweep_vertices.contains(&0)) {
         bail!("a target vertex count must be positive");
     }
+    // Another tool's meshes are read now, so a wrong path fails before anything runs.
+    for method in &methods {
+        if let Method::External { name, path } = method {
+            desal_io::read_mesh(path).with_context(|| format!("method '{name}'"))?;
+        }
+    }
     let pipeline = crate::pipeline::load(&args.pipeline, args.out.as_deref())?;
     let options = RunOptions {
         out: args.out.clone(),

@@ -258,6 +258,12 @@ fn bad_requests_fail_with_a_clear_message_and_leave_no_eval_folder() {
     assert!(!out.status.success());
     assert!(stderr(&out).contains("unknown method 'paper-best'"), "{}", stderr(&out));
 
+    // A missing external mesh is refused before the pipeline runs: nothing is written.
+    let out = desal_eval(&[p, "--methods", "external:cgal=/nonexistent/x.ply", "--quiet"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("method 'cgal'") && stderr(&out).contains("x.ply"), "{}", stderr(&out));
+    assert!(!dir.path().join("out").exists(), "nothing is written for a bad request");
+
     let out = desal_eval(&[p, "--folds", "1", "--quiet"]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("at least 2 folds"), "{}", stderr(&out));
