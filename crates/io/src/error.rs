@@ -6,6 +6,8 @@ use std::path::PathBuf;
 use desal_mesh::MeshError;
 use thiserror::Error;
 
+use crate::artifact::HEADER_LEN;
+
 #[derive(Debug, Error)]
 pub enum IoError {
     /// The OS refused to open, read or write the file. (`cause`, not `source`: the
@@ -59,6 +61,24 @@ pub enum IoError {
         "{path}: truncated artifact: the header announces {expected} payload bytes, the file holds {found}; the write was interrupted or the copy is incomplete — re-run the stage"
     )]
     Truncated { path: PathBuf, expected: u64, found: u64 },
+
+    /// The file ends inside the fixed-size header.
+    #[error(
+        "{path}: truncated artifact: the file ends after {found} bytes, inside the {HEADER_LEN}-byte header; the write was interrupted or the copy is incomplete — re-run the stage"
+    )]
+    TruncatedHeader { path: PathBuf, found: u64 },
+
+    /// The file is longer than its header says.
+    #[error(
+        "{path}: corrupt artifact: the header announces {expected} payload bytes, but {found} follow it; something was appended to the file — re-run the stage"
+    )]
+    TrailingBytes { path: PathBuf, expected: u64, found: u64 },
+
+    /// The kind code is not one this build knows.
+    #[error(
+        "{path}: unknown artifact kind code {code}: written by a newer desal, or corrupt; upgrade desal or re-run the stage"
+    )]
+    UnknownKind { path: PathBuf, code: u16 },
 
     /// The payload does not match its checksum.
     #[error("{path}: artifact checksum mismatch: the file is corrupt; delete it and re-run the stage")]

@@ -210,6 +210,14 @@ fn artifact_round_trips_and_refuses_corruption() {
     flipped[last] ^= 0x40;
     assert!(matches!(refuse(&flipped), IoError::Checksum { .. }));
     assert!(matches!(refuse(&bytes[..bytes.len() - 3]), IoError::Truncated { .. }));
+    assert!(matches!(refuse(&bytes[..30]), IoError::TruncatedHeader { found: 30, .. }));
+    let mut appended = bytes.clone();
+    appended.extend_from_slice(b"xx");
+    assert!(matches!(refuse(&appended), IoError::TrailingBytes { .. }));
+    let mut unknown = bytes.clone();
+    unknown[8] = 99;
+    let err = refuse(&unknown);
+    assert!(matches!(err, IoError::UnknownKind { code: 99, .. }), "{err}");
     let mut reserved = bytes.clone();
     reserved[13] = 1;
     assert!(matches!(refuse(&reserved), IoError::BadHeader { .. }));

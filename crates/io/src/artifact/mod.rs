@@ -218,19 +218,12 @@ pub fn check_envelope(path: &Path, bytes: &[u8]) -> Result<ArtifactHeader, IoErr
         return Err(IoError::NotAnArtifact { path: path.to_owned() });
     }
     if bytes.len() < HEADER_LEN {
-        return Err(IoError::Truncated {
-            path: path.to_owned(),
-            expected: HEADER_LEN as u64,
-            found: bytes.len() as u64,
-        });
+        return Err(IoError::TruncatedHeader { path: path.to_owned(), found: bytes.len() as u64 });
     }
     let u16_at = |at: usize| u16::from_le_bytes([bytes[at], bytes[at + 1]]);
     let code = u16_at(8);
-    let kind = ArtifactKind::from_code(code).ok_or_else(|| IoError::WrongKind {
-        path: path.to_owned(),
-        expected: "known",
-        found: format!("unknown kind code {code} (written by a newer desal?)"),
-    })?;
+    let kind =
+        ArtifactKind::from_code(code).ok_or_else(|| IoError::UnknownKind { path: path.to_owned(), code })?;
     if bytes[12..16] != [0; 4] {
         return Err(IoError::BadHeader { path: path.to_owned() });
     }
@@ -238,8 +231,11 @@ pub fn check_envelope(path: &Path, bytes: &[u8]) -> Result<ArtifactHeader, IoErr
     let mut checksum = [0u8; 32];
     checksum.copy_from_slice(&bytes[24..56]);
     let found = (bytes.len() - HEADER_LEN) as u64;
-    if found != payload_len {
+    if found < payload_len {
         return Err(IoError::Truncated { path: path.to_owned(), expected: payload_len, found });
+    }
+    if found > payload_len {
+        return Err(IoError::TrailingBytes { path: path.to_owned(), expected: payload_len, found });
     }
     let checksum = ContentHash(checksum);
     if ContentHash::of(&bytes[HEADER_LEN..]) != checksum {
