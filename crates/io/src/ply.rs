@@ -109,6 +109,23 @@ pub fn read_ply_full(path: &Path) -> Result<PlyMesh, IoError> {
     if !header.elements.contains_key("face") {
         return Err(IoError::bad_mesh(path, "no 'face' element: a point cloud is not a mesh"));
     }
+    // Data past the last element means the header's counts do not describe the file
+    // (a concatenation, or counts edited by hand): refused, not silently cut short.
+    let mut rest = Vec::new();
+    std::io::Read::read_to_end(reader.get_mut(), &mut rest).map_err(|e| IoError::io(path, e))?;
+    let trailing = match header.encoding {
+        Encoding::Ascii => rest.iter().filter(|b| !b.is_ascii_whitespace()).count(),
+        _ => rest.len(),
+    };
+    if trailing > 0 {
+        return Err(IoError::bad_mesh(
+            path,
+            format!(
+                "{} byte(s) follow the last element the header announces; the element counts do not match the data",
+                rest.len()
+            ),
+        ));
+    }
 
     let positions: Vec<Vec3> = vertices.iter().map(|v| Vec3::new(v.p[0], v.p[1], v.p[2])).collect();
     let mut faces: Vec<Face> = Vec::with_capacity(polygons.len());

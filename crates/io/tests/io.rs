@@ -60,6 +60,25 @@ fn truncated_binary_ply_is_refused_with_the_path() {
 }
 
 #[test]
+fn data_after_the_last_element_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for ascii in [false, true] {
+        let path = dir.path().join("t.ply");
+        let encoding = if ascii { PlyEncoding::Ascii } else { PlyEncoding::BinaryLittleEndian };
+        write_ply(&path, &tetra(), &PlyWriteOptions { encoding, ..PlyWriteOptions::default() }).unwrap();
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes.extend_from_slice(b"\n \n");
+        std::fs::write(&path, &bytes).unwrap();
+        // Trailing whitespace is harmless in ASCII, not in binary.
+        assert_eq!(read_mesh(&path).is_ok(), ascii, "ascii {ascii}");
+        bytes.extend_from_slice(b"garbage");
+        std::fs::write(&path, &bytes).unwrap();
+        let text = read_mesh(&path).unwrap_err().to_string();
+        assert!(text.contains("t.ply") && text.contains("follow the last element"), "{text}");
+    }
+}
+
+#[test]
 fn non_mesh_and_point_cloud_files_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let junk = dir.path().join("junk.ply");
