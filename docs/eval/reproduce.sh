@@ -2,7 +2,8 @@
 # Reproduces EVAL.md's SCAPE run and refreshes the copies in docs/eval/:
 # every built-in method, CGAL Lindstrom-Turk as the paper's third baseline (when the
 # peers are set up: PEERS_HOME=/tmp/desal-peers bash ../shared/peers/setup.sh), 5 folds,
-# the 1000..6000-vertex sweep. About 2 minutes on 2 cores.
+# the 1000..6000-vertex sweep. 1.5-4 minutes on 2 cores (95 s idle; the committed run,
+# on a loaded machine, reports 216 s in scape-eval.md).
 #
 #   bash docs/eval/reproduce.sh [OUT_DIR]           (default: /tmp/desal-eval-scape)
 set -euo pipefail

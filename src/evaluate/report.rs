@@ -424,7 +424,8 @@ fn cost_table(md: &mut String, report: &EvalReport) {
     let _ = writeln!(md, "## Simplification, model and timings\n");
     let _ = writeln!(
         md,
-        "Edge-length variance of the simplified template is the paper's Fig. 3 figure. Times are wall seconds of \
+        "Edge-length variance of the simplified template is the paper's Fig. 3 figure, measured on the \
+         registered template (after stage 4 snaps optimal placements to original vertices). Times are wall seconds of \
          this run (build profile and machine as run): the rigid fit gives the model's part rotations; model fit = \
          regressions + Poisson factorisation on all poses; synthesis per pose = one prediction and three \
          triangular solves. Measuring all methods took {:.2} s; the whole evaluation {:.1} s.\n",
