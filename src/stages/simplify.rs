@@ -11,7 +11,8 @@ use crate::cache::StageKey;
 use crate::pipeline::{SimplifyParams, canonical_json};
 
 /// Version of stage 3 as the driver runs it.
-pub const VERSION: u32 = 1;
+/// 2: the corner-normal fold guard (`max_corner_normal_deg`) changes results.
+pub const VERSION: u32 = 2;
 
 /// The target a parameter set asks for: vertices, else faces, else the ratio.
 pub fn target(params: &SimplifyParams) -> Target {

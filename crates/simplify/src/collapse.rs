@@ -345,6 +345,8 @@ struct Params {
     subset: bool,
     balance: bool,
     cos_max_rotation: f64,
+    /// `-inf` when the corner-normal guard is off (180°).
+    cos_max_corner_normal: f64,
     max_placement_distance: f64,
     /// Rank and place by Lindstrom–Turk's memoryless cost (single pose only).
     lindstrom_turk: bool,
@@ -372,6 +374,9 @@ struct Engine {
     /// collapse may not turn a face past the threshold from it either, since small
     /// steps add up.
     input_normals: Vec<InputNormal>,
+    /// Unit area-weighted normal of every input vertex (template pose): the local
+    /// surface orientation where a slot's vertex came from, whatever faces it has now.
+    vertex_normals: Vec<Vec3>,
     face_alive: Vec<bool>,
     face_start: Vec<u32>,
     face_len: Vec<u32>,
@@ -442,6 +447,15 @@ impl Engine {
                 (quadric, InputNormal { normal, length: normal.norm() })
             })
             .unzip();
+        let vertex_normals: Vec<Vec3> = (0..n)
+            .into_par_iter()
+            .map(|v| {
+                let sum: Vec3 =
+                    vertex_faces.of(v as u32).iter().map(|&f| input_normals[f as usize].normal).sum();
+                let length = sum.norm();
+                if length > 0.0 { sum / length } else { Vec3::zeros() }
+            })
+            .collect();
         let context = ClassifyContext {
             faces: &faces,
             vertex_faces: &vertex_faces,
@@ -489,6 +503,11 @@ impl Engine {
                 subset: config.placement == Placement::Subset,
                 balance: config.balance,
                 cos_max_rotation: config.max_normal_rotation_deg.to_radians().cos(),
+                cos_max_corner_normal: if config.max_corner_normal_deg >= 180.0 {
+                    f64::NEG_INFINITY
+                } else {
+                    config.max_corner_normal_deg.to_radians().cos()
+                },
                 max_placement_distance: config.max_placement_distance,
                 lindstrom_turk: config.metric == Metric::LindstromTurk && pose_count == 1,
             },
@@ -501,6 +520,7 @@ impl Engine {
             live_faces: faces.len(),
             face_alive: vec![true; faces.len()],
             input_normals,
+            vertex_normals,
             faces,
             face_start: vertex_faces.offsets[..n].to_vec(),
             face_len,
@@ -947,7 +967,9 @@ impl Engine {
     }
 
     /// Moving `moved` to `position` (merging it with `other`): refuse if any of its faces
-    /// not shared with `other` turns its normal past the threshold or becomes degenerate.
+    /// not shared with `other` becomes degenerate, turns its normal past the threshold
+    /// from before the collapse or from the input, or ends up too far from the input
+    /// normals of the vertices at its corners (`max_corner_normal_deg`).
     fn check_moved_faces(&self, moved: u32, other: u32, position: &Vec3) -> Result<(), Refusal> {
         for &f in self.faces_of(moved) {
             let face = self.faces[f as usize];
@@ -974,6 +996,14 @@ impl Engine {
             }
             let input = &self.input_normals[f as usize];
             if new.dot(&input.normal) <= self.params.cos_max_rotation * input.length * twice_area {
+                return Err(Refusal::Flip);
+            }
+            let n = &self.vertex_normals;
+            let reference: Vec3 = face
+                .iter()
+                .map(|&v| if v == moved { n[v as usize] + n[other as usize] } else { n[v as usize] })
+                .sum();
+            if new.dot(&reference) <= self.params.cos_max_corner_normal * reference.norm() * twice_area {
                 return Err(Refusal::Flip);
             }
         }
