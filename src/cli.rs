@@ -125,6 +125,10 @@ pub struct SimplifyArgs {
     /// lower surface error on a single mesh, see BENCHMARKS.md).
     #[arg(long, value_enum, default_value_t = MetricArg::Quadric)]
     pub metric: MetricArg,
+    /// Refuse collapses that leave a face more than this many degrees from the input
+    /// normals of its corners' vertices (the fold guard; 180 switches it off).
+    #[arg(long, default_value_t = 70.0)]
+    pub max_corner_normal_deg: f64,
     /// Run the simplification this many times and print SIMPLIFY_SECONDS=<best>
     /// (simplification alone, no I/O), for the peers' benchmark harness.
     #[arg(long)]
@@ -270,6 +274,7 @@ pub fn simplify(args: &SimplifyArgs) -> Result<()> {
             MetricArg::Quadric => Metric::Quadric,
             MetricArg::LindstromTurk => Metric::LindstromTurk,
         },
+        max_corner_normal_deg: args.max_corner_normal_deg,
         ..SimplifyConfig::default()
     };
     let mut input = SimplifyInput::new(&mesh);
