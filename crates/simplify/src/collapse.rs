@@ -8,7 +8,8 @@
 //! parallel those with an endpoint changed by the last pass (the others keep their
 //! cost: the quadric cost depends on the endpoints alone), sort the cheap ones, choose
 //! in cost order those that share no endpoint, and perform them, each re-checked against
-//! the safeguards (link condition, fold-over, degeneracy); finally compact the survivors
+//! the safeguards (link condition, fold-over against the face itself and against its
+//! corners' input normals, degeneracy); finally compact the survivors
 //! into the output mesh.
 //!
 //! Why passes and not a heap: the first version kept every edge in a binary heap with
