@@ -20,9 +20,9 @@ use crate::error::SaliencyError;
 
 /// Default [`SaliencyConfig::weight_floor`]: the weight of a vertex with zero saliency,
 /// relative to the most salient vertex's weight of 1. Chosen by measurement
-/// (docs/KNOBS.md): the smallest floor whose held-out deformation errors stay at or
-/// below plain QSlim's on both SCAPE and the skinned sample, where floors below it let
-/// stage 3 erase the rigid hands (floor 0: +84 % v2f on the sample).
+/// (docs/KNOBS.md): the lowest floor at which the skinned sample's held-out deformation
+/// errors stay level with plain QSlim's (lower floors thin out its rigid hands: floor 0
+/// costs +12 % to +20 % v2f there), keeping most of SCAPE's gain from low floors.
 pub const DEFAULT_WEIGHT_FLOOR: Real = 0.05;
 
 /// A borrowed view of stage 1's residual table, so that this crate needs no dependency
