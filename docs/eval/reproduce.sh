@@ -2,8 +2,7 @@
 # Reproduces EVAL.md's SCAPE run and refreshes the copies in docs/eval/:
 # every built-in method, CGAL Lindstrom-Turk as the paper's third baseline (when the
 # peers are set up: PEERS_HOME=/tmp/desal-peers bash ../shared/peers/setup.sh), 5 folds,
-# the 1000..6000-vertex sweep. 1.5-4 minutes on 2 cores (95 s idle; the committed run,
-# on a loaded machine, reports 216 s in scape-eval.md).
+# the 1000..6000-vertex sweep. 1-4 minutes on 2 cores (the committed run: 67 s, idle).
 #
 #   bash docs/eval/reproduce.sh [OUT_DIR]           (default: /tmp/desal-eval-scape)
 set -euo pipefail
