@@ -198,20 +198,36 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
             .try_into()
             .with_context(|| format!("{}: dataset #{} ({})", path.display(), k + 1, dataset_name(table)))?;
         check_dataset_name(&spec.name).with_context(|| format!("{}: dataset #{}", path.display(), k + 1))?;
-        // Stage parameters are checked now, before any stage runs.
-        crate::stages::fit::config(&spec.fit)
-            .and(crate::stages::simplify::config(&spec.simplify).map(drop))
-            .with_context(|| format!("{}: dataset '{}'", path.display(), spec.name))?;
         if datasets.iter().any(|d: &Dataset| d.spec.name == spec.name) {
             bail!("{}: two datasets are named '{}'; names must be unique", path.display(), spec.name);
         }
         let pose_files = resolve_poses(&base, &spec.poses)
+            .with_context(|| format!("{}: dataset '{}'", path.display(), spec.name))?;
+        // Every stage parameter is checked now, before any stage runs.
+        check_parameters(&spec, &pose_files)
             .with_context(|| format!("{}: dataset '{}'", path.display(), spec.name))?;
         let labels_file = base.join(&spec.labels);
         let out_dir = out_root.join(&spec.name);
         datasets.push(Dataset { spec, pose_files, labels_file, out_dir });
     }
     Ok(Pipeline { path: path.to_owned(), out_root, datasets })
+}
+
+/// The stage parameters that can be checked without reading a mesh: fit method,
+/// saliency options and excluded pose names, simplify target and options, up axis.
+fn check_parameters(spec: &DatasetToml, pose_files: &[PathBuf]) -> Result<()> {
+    crate::stages::fit::config(&spec.fit)?;
+    crate::stages::saliency::config(&spec.saliency).validate()?;
+    let names: Vec<String> = pose_files.iter().map(|f| crate::ingest::pose_name(f)).collect();
+    if let Some(unknown) = spec.saliency.exclude.iter().find(|e| !names.contains(e)) {
+        bail!(
+            "saliency.exclude names pose '{unknown}', which is not in the pose list ({} poses)",
+            names.len()
+        );
+    }
+    crate::stages::simplify::config(&spec.simplify)?;
+    crate::pictures::parse_up_axis(spec.up_axis.as_deref())?;
+    Ok(())
 }
 
 /// A dataset's name is its output sub-folder, so it must stay one plain folder name:

@@ -186,3 +186,21 @@ fn bundled_sample_runs_end_to_end_and_writes_pictures() {
     assert!(saliency.iter().all(|s| (0.0..=1.0).contains(s)));
     assert_eq!(saliency.iter().cloned().fold(0.0, f32::max), 1.0, "normalised by the max");
 }
+
+#[test]
+fn bad_stage_parameters_are_refused_before_anything_runs() {
+    for (extra, expected) in [
+        ("[dataset.saliency]\npercentile = 0\n", "percentile"),
+        ("[dataset.saliency]\nexclude = [\"nosuch\"]\n", "pose 'nosuch'"),
+        ("up_axis = \"w\"\n", "up_axis 'w'"),
+        ("[dataset.fit]\nmethod = \"spline\"\n", "fit.method 'spline'"),
+        ("[dataset.simplify]\ntarget_vertices = 2\n", "too small"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let pipeline = write_tube_dataset(dir.path(), extra);
+        let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+        assert!(!out.status.success(), "{extra}");
+        assert!(stderr(&out).contains(expected), "{extra}: {}", stderr(&out));
+        assert!(!dir.path().join("out").exists(), "{extra}: nothing may be written, not even the cache");
+    }
+}

@@ -146,7 +146,7 @@ pub struct SaliencyReport {
 /// a non-finite or negative residual, an unknown excluded pose, no pose left, or an
 /// option out of range.
 pub fn compute_saliency(table: &ResidualTable, config: &SaliencyConfig) -> Result<Saliency, SaliencyError> {
-    check_config(config)?;
+    config.validate()?;
     let poses = pick_contributing_poses(table, &config.exclude_poses)?;
     check_residuals(table, &poses)?;
 
@@ -174,6 +174,14 @@ pub fn compute_saliency(table: &ResidualTable, config: &SaliencyConfig) -> Resul
         rigid,
     };
     Ok(Saliency { saliency, weights, raw, normaliser, report })
+}
+
+impl SaliencyConfig {
+    /// Checks the options that do not depend on the data (floor, percentile, tolerance),
+    /// so a driver can refuse a bad configuration before any stage runs.
+    pub fn validate(&self) -> Result<(), SaliencyError> {
+        check_config(self)
+    }
 }
 
 fn check_config(config: &SaliencyConfig) -> Result<(), SaliencyError> {
