@@ -461,7 +461,37 @@ fn cost_table(md: &mut String, report: &EvalReport) {
 
 #[cfg(test)]
 mod tests {
-    use super::sign_test;
+    use super::{PoseRecord, sign_test, versus};
+    use crate::evaluate::measure::{Errors, PoseErrors};
+
+    /// A pose whose every error is `v2v` (v2f = v2v / 2), in every split.
+    fn pose(k: usize, v2v: f64) -> PoseRecord {
+        let e = Errors { v2f: v2v / 2.0, v2v, v2f_deformed_to_target: 0.0, v2f_target_to_deformed: 0.0 };
+        let both = PoseErrors { vs_simplified: e, vs_full: e };
+        PoseRecord { pose: k, name: format!("p{k}"), fold: 0, in_sample: both, held_out: both }
+    }
+
+    #[test]
+    fn versus_counts_wins_ties_and_the_relative_change_of_the_means() {
+        // Baseline mean 2.5; the method wins pose 0, ties pose 1, loses pose 2 and wins
+        // pose 3: mean 2.25 (−10 %), wins 2 of the 3 poses that differ.
+        let baseline: Vec<_> = [2.0, 2.0, 3.0, 3.0].iter().enumerate().map(|(k, &v)| pose(k, v)).collect();
+        let method: Vec<_> = [1.0, 2.0, 4.0, 2.0].iter().enumerate().map(|(k, &v)| pose(k, v)).collect();
+        let v = versus(&method, &baseline);
+        for change in
+            [v.in_sample.vs_simplified, v.in_sample.vs_full, v.held_out.vs_simplified, v.held_out.vs_full]
+        {
+            assert!((change.v2v_percent + 10.0).abs() < 1e-12, "{}", change.v2v_percent);
+            assert!((change.v2f_percent + 10.0).abs() < 1e-12);
+            assert_eq!((change.v2v_wins, change.v2f_wins), (2, 2));
+            assert_eq!(change.v2v_p, sign_test(2, 3));
+            assert_eq!(change.v2v_p, 1.0, "2 of 3 is no evidence either way");
+        }
+        // Swapping the roles flips the sign and the wins.
+        let back = versus(&baseline, &method);
+        assert!((back.held_out.vs_full.v2v_percent - 100.0 * (2.5 / 2.25 - 1.0)).abs() < 1e-12);
+        assert_eq!(back.held_out.vs_full.v2v_wins, 1);
+    }
 
     #[test]
     fn sign_test_matches_exact_binomial_tails() {

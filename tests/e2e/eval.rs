@@ -318,13 +318,16 @@ fn scape_eval_reports_every_pose_and_moves_vertices_to_the_joints() {
         let m = method(&report, name);
         assert_eq!(m["vertices"], 2500);
         assert_eq!(m["poses"].as_array().unwrap().len(), 70);
-        // A 2500-vertex body deformed by a linear pose model: millimetres to a few
-        // centimetres of error, never zero (a leak of the target) nor metres (a broken
-        // solve). Rigid parts alone give ~8e-4 m² at full resolution.
+        // A 2500-vertex body deformed by the linear SCAPE pose model: about 12–14 mm RMS
+        // against the full-resolution pose (v2v 1.5e-4 in-sample, 1.8e-4 held out; the
+        // model on the full mesh itself reaches 1.79e-4 held out). Well below rigid parts
+        // alone (~8e-4), never near zero (a leak of the target); held out never beats
+        // in-sample.
+        let v2v = |split: &str| f(&m["summary"][split]["vs_full"]["v2v"]["mean"]);
         for split in ["in_sample", "held_out"] {
-            let v2v = f(&m["summary"][split]["vs_full"]["v2v"]["mean"]);
-            assert!((1e-5..8e-4).contains(&v2v), "{name} {split} v2v {v2v:e} m²");
+            assert!((1.2e-4..2.6e-4).contains(&v2v(split)), "{name} {split} v2v {:e} m²", v2v(split));
         }
+        assert!(v2v("held_out") >= v2v("in_sample"), "{name}: held-out error below in-sample");
     }
     let (qslim, paper) = (method(&report, "qslim-optimal"), method(&report, "paper-optimal"));
     assert!(

@@ -125,7 +125,8 @@ fn scape_in_sample_error_all_poses() {
 }
 
 /// Held-out figure for the report: 5 folds over the non-template poses, each model
-/// fitted without its test poses. Prints only (no threshold is known to hold).
+/// fitted without its test poses. Measured 1.79e-4 m² v2v (EVAL.md); checked against a
+/// band around it.
 #[test]
 #[ignore = "slow in debug builds; run in release for the reported figure"]
 fn scape_held_out_error() {
@@ -146,6 +147,8 @@ fn scape_held_out_error() {
     let n = errors.len() as f64;
     let (v2v_mean, v2f_mean) = errors.iter().fold((0.0, 0.0), |(a, b), (x, y)| (a + x / n, b + y / n));
     eprintln!("SCAPE held-out (5 folds, {n} poses): v2v {v2v_mean:.3e} m², v2f {v2f_mean:.3e} m²");
+    assert!((1.5e-4..2.2e-4).contains(&v2v_mean), "held-out v2v {v2v_mean:e} m²");
+    assert!(v2f_mean <= v2v_mean, "v2f {v2f_mean:e} above v2v {v2v_mean:e}");
 }
 
 fn check_scape_in_sample(pose_stride: usize) {

@@ -5,7 +5,6 @@
 //! Run: `cargo bench -p desal-map --bench map`.
 
 use std::hint::black_box;
-use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use desal_map::{greedy_map, greedy_map_brute_force};
@@ -49,12 +48,9 @@ fn random_points(c: &mut Criterion) {
 }
 
 fn scape_template(c: &mut Criterion) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/datasets/scape/mesh000.ply");
-    if !path.exists() {
-        eprintln!("skipped: {} not found", path.display());
-        return;
-    }
-    let template = desal_io::read_mesh(&path).unwrap();
+    // Skips with a printed reason on a clone without SCAPE (desal-testdata's policy).
+    let Some(dir) = desal_testdata::scape_dir() else { return };
+    let template = desal_io::read_mesh(&dir.join("mesh000.ply")).unwrap();
     let simplified = decimate_and_perturb(&template.positions, 0.005, 3);
     bench_pair(c, "SCAPE mesh000 2500 onto 12500", &simplified, &template.positions);
 }
