@@ -433,7 +433,7 @@ fn cost_table(md: &mut String, report: &EvalReport) {
     );
     let _ = writeln!(
         md,
-        "| method | vertices | faces | stop | map | displacement mean / max (mm) | edge length mean (mm) / variance (m²) | rigid fit (s) | model fit (s) | synthesis (ms/pose) | all folds fit + synth (s) |"
+        "| method | vertices | faces | stop | map | displacement mean / max (mm) | edge length mean (mm) / variance (m²) | rigid fit (s) | model fit (s) | synthesis (ms/pose) | all models (in-sample + folds) fit + synth (s) |"
     );
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
     for m in &report.methods {

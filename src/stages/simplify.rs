@@ -207,7 +207,7 @@ pub fn describe(s: &SimplifiedV1, out: &mut String) {
     );
     let _ = writeln!(
         out,
-        "    collapse error max {:.3e} mean {:.3e}; edge length mean {:.4e}, variance {:.3e}; {} of {} vertices are original vertices",
+        "    collapse error (RMS distance, mesh units) max {:.3e} mean {:.3e}; edge length mean {:.4e}, variance {:.3e}; {} of {} vertices are original vertices",
         s.max_error,
         s.mean_error,
         s.edge_length_mean,
