@@ -83,6 +83,6 @@ pub enum SampleError {
     PoseNotClean { pose: String, inverted_faces: usize, intersections: usize, rest_intersections: usize },
 
     /// The posed meshes failed `PoseSet` validation (a bug in the generator).
-    #[error("the generated pose set is invalid: {0}")]
+    #[error("the generated pose set is invalid (a bug in the generator)")]
     Mesh(#[from] desal_mesh::MeshError),
 }
