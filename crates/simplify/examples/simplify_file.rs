@@ -2,7 +2,7 @@
 //! wired into the root package: same flags (`--input --output --target-faces N
 //! [--target-vertices N] [--ratio R] [--placement optimal|subset] [--metric quadric|lt]
 //! [--repeat R]`, plus
-//! `--max-rotation DEG --max-distance K` for tuning), prints
+//! `--max-rotation DEG --max-corner-normal DEG --max-distance K` for tuning), prints
 //! the one-line report to stderr and `SIMPLIFY_SECONDS=<best>` (simplification alone).
 //! Run: `cargo run --release -p desal-simplify --example simplify_file -- --input ...`.
 
@@ -35,6 +35,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         None | Some("quadric") => {}
         Some("lt") => config.metric = Metric::LindstromTurk,
         Some(other) => return Err(format!("--metric {other}: use quadric or lt").into()),
+    }
+    if let Some(x) = value("--max-corner-normal") {
+        config.max_corner_normal_deg = x.parse()?;
     }
     if let Some(x) = value("--max-rotation") {
         config.max_normal_rotation_deg = x.parse()?;
