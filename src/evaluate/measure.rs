@@ -13,7 +13,9 @@
 //! A test pose's rotations come from its own ground truth, as in SCAPE: a pose is
 //! *given* by its part rotations, and what is held out is the deformation model's
 //! training data. Rotations of different poses are fitted independently, so nothing
-//! of a test pose reaches its model.
+//! of a test pose reaches its model. The simplified mesh is another matter: it is made
+//! once per method, and stage 2's saliency (and `multipose`'s quadrics) saw every pose;
+//! `docs/eval/blind-saliency.sh` measures what that is worth (EVAL.md).
 
 use std::time::Instant;
 
