@@ -517,7 +517,9 @@ impl Engine {
             positions,
             pose_positions,
             quadrics,
-            weights: weights.filter(|_| config.saliency).map(<[f64]>::to_vec),
+            // `+ 0.0` turns a −0 weight into +0: costs are ranked by their bit patterns,
+            // where −0 would sort after every positive cost.
+            weights: weights.filter(|_| config.saliency).map(|w| w.iter().map(|&x| x + 0.0).collect()),
             live_faces: faces.len(),
             face_alive: vec![true; faces.len()],
             input_normals,

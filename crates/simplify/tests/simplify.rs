@@ -258,6 +258,17 @@ fn equal_weights_rank_like_plain_qem() {
 
 /// Weighting one half of a blob ten times keeps clearly more of its vertices there.
 #[test]
+fn a_negative_zero_weight_ranks_like_zero() {
+    let mesh = blob(10, 0.08, 4);
+    let zero: Vec<f64> = mesh.positions.iter().map(|p| if p.x > 0.0 { 0.0 } else { 1.0 }).collect();
+    let negative_zero: Vec<f64> = zero.iter().map(|&w| if w == 0.0 { -0.0 } else { w }).collect();
+    let config = SimplifyConfig::paper(Target::Faces(200));
+    let a = simplify(&SimplifyInput::new(&mesh).with_weights(&zero), &config).unwrap();
+    let b = simplify(&SimplifyInput::new(&mesh).with_weights(&negative_zero), &config).unwrap();
+    assert!(same_result(&a, &b));
+}
+
+#[test]
 fn high_weight_region_keeps_more_vertices() {
     let mesh = blob(10, 0.08, 4);
     let weights: Vec<f64> = mesh.positions.iter().map(|p| if p.x > 0.0 { 10.0 } else { 1.0 }).collect();
