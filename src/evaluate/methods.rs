@@ -175,6 +175,10 @@ pub struct Inputs {
     pub labels: PartLabels,
     /// Stage-3 weights per original vertex (saliency with its floor applied).
     pub weights: Vec<f64>,
+    /// The poses whose shapes may guide a pose-aware simplification: those stage 2's
+    /// saliency summed (every pose but the ones `[saliency] exclude` names). `multipose`
+    /// sums its quadrics over these too, so excluding a pose hides it from both.
+    pub simplification_poses: Vec<usize>,
     /// The pipeline's stage-3 configuration; each method overrides the target, the
     /// placement and the cost switches.
     pub base_config: SimplifyConfig,
@@ -232,7 +236,18 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 SimplifyConfig { target, saliency: false, balance: false, ..inputs.base_config.clone() };
             let labels = (config.part_borders != desal_simplify::PartBorders::Ignore)
                 .then_some(inputs.labels.labels.as_slice());
-            let result = desal_simplify::simplify_multipose(&inputs.poses, None, labels, &config)
+            let poses = &inputs.poses;
+            let seen = &inputs.simplification_poses;
+            let subset = PoseSet {
+                names: seen.iter().map(|&p| poses.names[p].clone()).collect(),
+                poses: seen.iter().map(|&p| poses.poses[p].clone()).collect(),
+                faces: poses.faces.clone(),
+                template: seen
+                    .iter()
+                    .position(|&p| p == poses.template)
+                    .expect("the template is never excluded"),
+            };
+            let result = desal_simplify::simplify_multipose(&subset, None, labels, &config)
                 .with_context(|| format!("{name}: multi-pose simplification"))?;
             let kept = result.subset_indices();
             (result.mesh, kept, Some(result.report.stop), result.report.to_string())

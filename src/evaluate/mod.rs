@@ -219,7 +219,11 @@ fn load_inputs(dataset: &Dataset) -> Result<Inputs> {
         );
     }
     let base_config = crate::stages::simplify::config(&dataset.spec.simplify)?;
-    Ok(Inputs { poses, labels, weights: saliency.weights, base_config })
+    let excluded = &dataset.spec.saliency.exclude;
+    let simplification_poses = (0..poses.pose_count())
+        .filter(|&p| p == poses.template || !excluded.contains(&poses.names[p]))
+        .collect();
+    Ok(Inputs { poses, labels, weights: saliency.weights, simplification_poses, base_config })
 }
 
 #[allow(clippy::too_many_arguments)]
