@@ -231,7 +231,8 @@ pub fn markdown(report: &EvalReport, figures: &[String]) -> String {
          mean ± standard deviation over the {n} non-template poses. **In-sample**: one model fitted on all poses. \
          **Held-out**: {}-fold over the non-template poses; each pose is deformed by the model that did not see it \
          (the template always trains). What is held out is the deformation model: each method's simplification is \
-         made once, and the saliency (and `multipose`'s quadrics) it uses come from every pose of the set. \
+         made once, and the saliency (and `multipose`'s quadrics) it uses come from every pose that \
+         `[saliency] exclude` does not name, test poses included. \
          **vs simplified GT** is the paper's measure (the method's own simplified \
          pose); **vs full GT** is against the full-resolution pose. Δ is the relative change of the mean against \
          `{}` (negative = lower error); *better on* counts the poses on which the method's error is lower; the \
