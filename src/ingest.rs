@@ -149,21 +149,13 @@ pub fn ingest_labels(path: &Path, set: &PoseSet) -> Result<PartLabels> {
 /// faces, warning on stderr with the file and a face index: never silently.
 pub fn clean_faces_with_warnings(file: &Path, faces: &[Face]) -> (Vec<Face>, FaceCleanup) {
     let (kept, cleanup) = clean_faces(faces);
-    if !cleanup.degenerate.is_empty() {
-        eprintln!(
-            "warning: {}: removed {} degenerate face(s) (a repeated vertex), e.g. face {}",
-            file.display(),
-            cleanup.degenerate.len(),
-            cleanup.degenerate[0]
-        );
-    }
-    if !cleanup.duplicate.is_empty() {
-        eprintln!(
-            "warning: {}: removed {} duplicate face(s) (same vertices as an earlier face), e.g. face {}",
-            file.display(),
-            cleanup.duplicate.len(),
-            cleanup.duplicate[0]
-        );
+    for (removed, what) in [
+        (&cleanup.degenerate, "degenerate face(s) (a repeated vertex)"),
+        (&cleanup.duplicate, "duplicate face(s) (same vertices as an earlier face)"),
+    ] {
+        if let Some(first) = removed.first() {
+            eprintln!("warning: {}: removed {} {what}, e.g. face {first}", file.display(), removed.len());
+        }
     }
     (kept, cleanup)
 }

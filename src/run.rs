@@ -381,6 +381,8 @@ fn check_output_folder(out_dir: &Path) -> Result<()> {
 /// the folder is either the previous run's or this run's, never a mix. `desal eval`'s
 /// `eval/` subfolder is carried over into the new folder.
 fn write_outputs(out_dir: &Path, outputs: DatasetOutputs, report: &DatasetReport) -> Result<()> {
+    // Checked again right before the swap: `run_dataset` checked before the stages ran,
+    // and someone may have written into the folder since.
     check_output_folder(out_dir)?;
     let parent = out_dir.parent().context("output folder has no parent")?;
     let name = out_dir.file_name().context("output folder has no name")?.to_string_lossy().into_owned();

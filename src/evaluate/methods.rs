@@ -238,16 +238,23 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 .then_some(inputs.labels.labels.as_slice());
             let poses = &inputs.poses;
             let seen = &inputs.simplification_poses;
-            let subset = PoseSet {
-                names: seen.iter().map(|&p| poses.names[p].clone()).collect(),
-                poses: seen.iter().map(|&p| poses.poses[p].clone()).collect(),
-                faces: poses.faces.clone(),
-                template: seen
-                    .iter()
-                    .position(|&p| p == poses.template)
-                    .expect("the template is never excluded"),
+            // A copy of the pose set only when `[saliency] exclude` hides some poses.
+            let subset;
+            let quadric_poses = if seen.len() == poses.pose_count() {
+                poses
+            } else {
+                subset = PoseSet {
+                    names: seen.iter().map(|&p| poses.names[p].clone()).collect(),
+                    poses: seen.iter().map(|&p| poses.poses[p].clone()).collect(),
+                    faces: poses.faces.clone(),
+                    template: seen
+                        .iter()
+                        .position(|&p| p == poses.template)
+                        .expect("the template is never excluded"),
+                };
+                &subset
             };
-            let result = desal_simplify::simplify_multipose(&subset, None, labels, &config)
+            let result = desal_simplify::simplify_multipose(quadric_poses, None, labels, &config)
                 .with_context(|| format!("{name}: multi-pose simplification"))?;
             let kept = result.subset_indices();
             (result.mesh, kept, Some(result.report.stop), result.report.to_string())

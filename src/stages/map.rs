@@ -22,8 +22,6 @@ pub fn key(poses: ContentHash, simplified: ContentHash) -> StageKey {
     }
 }
 
-/// Maps the simplified template to original vertices: exactly, when every simplified
-/// vertex is an original one (subset placement); by the paper's greedy rule otherwise.
 /// A mapped vertex this far (mean, as a fraction of the template's bounding-box
 /// diagonal) from its original vertex means the simplified mesh is of another template:
 /// desal's own and the peers' simplifications at SCAPE's 2500 vertices are at 0.2 %.
@@ -58,6 +56,9 @@ fn check_made_from(simplified: &SimplifiedV1, set: &PoseSet) -> Result<()> {
     Ok(())
 }
 
+/// Maps the simplified template to original vertices: exactly, when every simplified
+/// vertex is an original one (subset placement); by the paper's greedy rule otherwise.
+/// Refuses a result of another pose set, or a mesh that does not lie on the template.
 pub fn compute(
     simplified: &SimplifiedV1,
     set: &PoseSet,

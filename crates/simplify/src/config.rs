@@ -105,7 +105,8 @@ pub struct SimplifyConfig {
     /// measured (BENCHMARKS.md "Fold guard"): on SCAPE → 5000 faces it halves the
     /// faces the peers' harness flags (QEM 6 → 3, subset 4 → 2, Lindstrom–Turk 3 → 0)
     /// for +0.3–0.9 % RMS, and on random coarse blobs it removes the folds the per-face
-    /// test lets through (15 of 1500 runs → 0); 60° starts refusing useful collapses.
+    /// test lets through (15 of 1500 runs → 0); 60° erodes the saliency's effect (the
+    /// `fold_guard_survey` test prints both).
     /// `180` switches it off. Default: 70.
     pub max_corner_normal_deg: f64,
     /// Optimal placements farther than this many edge lengths from the edge midpoint are

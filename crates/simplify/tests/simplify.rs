@@ -533,3 +533,55 @@ fn scape_template_with_pinched_vertex_simplifies() {
         assert_eq!(EdgeTopology::new(&out.mesh.faces).non_manifold_edge_count(), 0);
     }
 }
+
+/// The survey behind `max_corner_normal_deg`'s default (BENCHMARKS.md "Fold guard"): per
+/// angle, how many of 1500 random closed blobs end with a face flagged as flipped by the
+/// nearest-input-normal test, and the gain of `high_weight_region_keeps_more_vertices`
+/// (vertices on the weighted half, with and without the weights; it asserts ≥ 1.3): too
+/// strict a guard erodes it.
+/// `cargo test --release -p desal-simplify --test simplify fold_guard_survey -- --ignored --nocapture`
+#[test]
+#[ignore = "a survey (~1 min in release); prints the table BENCHMARKS.md quotes"]
+fn fold_guard_survey() {
+    let mut cases = rand_chacha::ChaCha8Rng::seed_from_u64(12345);
+    let blobs: Vec<(TriMesh, SimplifyConfig)> = (0..1500)
+        .map(|_| {
+            let mesh =
+                blob(cases.gen_range(3usize..8), cases.gen_range(0.0..0.06f64), cases.gen_range(0u64..1000));
+            let keep = cases.gen_range(0.05..0.8f64);
+            let placement = if cases.gen_bool(0.5) { Placement::Optimal } else { Placement::Subset };
+            let metric = if cases.gen_bool(0.5) { Metric::Quadric } else { Metric::LindstromTurk };
+            let balance = cases.gen_bool(0.5);
+            let target = Target::Faces(((mesh.faces.len() as f64) * keep) as usize);
+            (mesh, SimplifyConfig { placement, balance, metric, ..SimplifyConfig::qslim(target) })
+        })
+        .collect();
+    let weighted = blob(10, 0.08, 4);
+    let weights: Vec<f64> = weighted.positions.iter().map(|p| if p.x > 0.0 { 10.0 } else { 1.0 }).collect();
+    let mut flagged_at = Vec::new();
+    println!(
+        "| max_corner_normal_deg | blobs with a flagged face (of 1500) | x > 0 vertices, weighted / unweighted |"
+    );
+    println!("|---|---|---|");
+    for deg in [180.0, 85.0, 80.0, 75.0, 70.0, 65.0, 60.0] {
+        let flagged = blobs
+            .iter()
+            .filter(|(mesh, config)| {
+                let out = run(mesh, &SimplifyConfig { max_corner_normal_deg: deg, ..config.clone() });
+                (0..out.mesh.faces.len()).any(|f| {
+                    let [a, b, c] = out.mesh.corners(f);
+                    (b - a).cross(&(c - a)).dot(&nearest_input_normal(mesh, &((a + b + c) / 3.0))) <= 0.0
+                })
+            })
+            .count();
+        let config =
+            SimplifyConfig { max_corner_normal_deg: deg, ..SimplifyConfig::paper(Target::Faces(200)) };
+        let right = |s: &Simplified| s.mesh.positions.iter().filter(|p| p.x > 0.0).count();
+        let with = right(&simplify(&SimplifyInput::new(&weighted).with_weights(&weights), &config).unwrap());
+        let without = right(&run(&weighted, &config));
+        println!("| {deg} | {flagged} | {with} / {without} = {:.2} |", with as f64 / without as f64);
+        flagged_at.push((deg, flagged));
+    }
+    let count = |deg: f64| flagged_at.iter().find(|(d, _)| *d == deg).unwrap().1;
+    assert!(count(70.0) < count(180.0), "the guard must remove folds: {flagged_at:?}");
+}
