@@ -418,9 +418,9 @@ fn metric_strategy() -> impl Strategy<Value = Metric> {
 proptest! {
     // A fixed seed: the same cases on every run. Random seeds found coarse blobs on which
     // a face ends up standing on edge (`fold_on_a_great_circle_is_refused`); the corner-
-    // normal guard removed those (closed blobs, 1500 random runs: 15 flagged without it,
-    // 0 with it), but on ~100-face approximations of a sphere the nearest-input-face test
-    // can still flag a tilted sliver about once in 1000 runs, and on the roughest height
+    // normal guard removed those (`fold_guard_survey`: 15 of 1500 closed blobs flagged
+    // without it, 0 with it), but random seeds still found, rarely, a tilted sliver on a
+    // ~100-face blob that the nearest-input-face test flags, and on the roughest height
     // fields a steep input face can be nearest to a fine coarse face (the test judging
     // the noise, whatever the guard), so CI does not draw seeds.
     #![proptest_config(ProptestConfig {
