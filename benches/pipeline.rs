@@ -6,9 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use desal::ingest;
 use desal::progress::ProgressMode;
 use desal::run::RunOptions;
+use desal::stages::ingest;
 use desal_io::artifact::{self, PoseSetV1, Producer};
 use desal_mesh::NoProgress;
 
@@ -53,15 +53,15 @@ fn bench_fit_and_saliency(c: &mut Criterion) {
     let (set, _) = ingest::ingest_poses(&files, 0, false, &NoProgress).unwrap();
     let labels_path = files[0].with_file_name("vertex_part_labels_16.txt");
     let labels = ingest::ingest_labels(&labels_path, &set).unwrap();
-    let fit_params = desal::pipeline::FitParams::default();
-    let saliency_params = desal::pipeline::SaliencyParams::default();
+    let fit_params = desal::stages::fit::FitParams::default();
+    let saliency_params = desal::stages::saliency::SaliencyParams::default();
     let diagonal = set.template_mesh().diagonal();
     let mut group = c.benchmark_group("scape-71");
     group.sample_size(20);
     group.bench_function("fit (stage 1)", |b| {
         b.iter(|| desal::stages::fit::compute(&fit_params, &set, &labels, &NoProgress).unwrap());
     });
-    let (fit, _, _) = desal::stages::fit::compute(&fit_params, &set, &labels, &NoProgress).unwrap();
+    let fit = desal::stages::fit::compute(&fit_params, &set, &labels, &NoProgress).unwrap().body;
     group.bench_function("saliency (stage 2)", |b| {
         b.iter(|| desal::stages::saliency::compute(&saliency_params, &fit, diagonal).unwrap());
     });

@@ -143,7 +143,7 @@ struct Dataset {
 impl Dataset {
     /// Stage-3 weights at `floor`: `w = floor + (1 − floor) · saliency`, as stage 2 does.
     fn weights(&self, floor: f64) -> Vec<f64> {
-        self.saliency.iter().map(|&s| floor + (1.0 - floor) * s).collect()
+        self.saliency.iter().map(|&s| desal_saliency::weight(s, floor)).collect()
     }
 }
 

@@ -7,7 +7,8 @@
 //! | `stage`          | stage id (`ingest`, `labels`, `fit`, `saliency`, `simplify`, `map`) |
 //! | `stage_version`  | version of the stage's algorithm (bumped when output changes)   |
 //! | `format_version` | format version of the artifact kind it writes                   |
-//! | `parameters`     | the stage's parameters, canonical JSON (sorted keys)            |
+//! | `parameters`     | the parameters the user set, canonical JSON (sorted keys); also recorded in the artifact's producer |
+//! | `resolved`       | the stage's *resolved* library configuration, every field, canonical JSON: changing a default invalidates without anyone bumping a version |
 //! | `inputs`         | `(role, content hash)` of every input: file bytes for source files, payload hashes for artifacts |
 //!
 //! What never goes in: paths, file names, modification times, the dataset's name, the
@@ -31,14 +32,49 @@ use anyhow::{Context, Result};
 use desal_io::artifact::{self, ArtifactBody, ContentHash, InputRef, Producer};
 use serde::{Deserialize, Serialize};
 
+/// Canonical JSON of a parameter struct: sorted keys, no whitespace. This is the form
+/// that enters cache keys and artifact producers.
+pub fn canonical_json<T: Serialize>(value: &T) -> String {
+    // serde_json's Map is a BTreeMap (no `preserve_order` feature), so keys come out sorted.
+    let v = serde_json::to_value(value).expect("parameters serialise");
+    serde_json::to_string(&v).expect("a JSON value serialises")
+}
+
+/// Serde through an enum's `Display`/`FromStr` (`#[serde(with = "crate::cache::by_name")]`):
+/// the stage crates own each enum's one spelling table, and pipeline files, keys and
+/// reports all read and write it.
+pub mod by_name {
+    use std::fmt::Display;
+    use std::str::FromStr;
+
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<T: Display, S: Serializer>(value: &T, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_str(value)
+    }
+
+    pub fn deserialize<'de, T, D>(deserializer: D) -> Result<T, D::Error>
+    where
+        T: FromStr<Err = String>,
+        D: Deserializer<'de>,
+    {
+        let text = String::deserialize(deserializer)?;
+        text.parse().map_err(serde::de::Error::custom)
+    }
+}
+
 /// The components of a stage run's cache key.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StageKey {
     pub stage: String,
     pub stage_version: u32,
     pub format_version: u16,
-    /// Canonical JSON of the parameters.
+    /// Canonical JSON of the parameters the user set (what the producer records).
     pub parameters: String,
+    /// Canonical JSON of the resolved library configuration, every field (see the module
+    /// table). Built by each stage's `key()` from an exhaustive destructuring, so a
+    /// config field left out of it does not compile.
+    pub resolved: String,
     /// `(role, hash)` of every input, in a fixed order per stage.
     pub inputs: Vec<(String, ContentHash)>,
 }
@@ -46,7 +82,7 @@ pub struct StageKey {
 impl StageKey {
     /// The key: BLAKE3 of the canonical JSON of the components.
     pub fn hash(&self) -> ContentHash {
-        ContentHash::of(crate::pipeline::canonical_json(self).as_bytes())
+        ContentHash::of(canonical_json(self).as_bytes())
     }
 
     /// The producer record an artifact made under this key carries. `hints` gives a
@@ -78,6 +114,8 @@ impl StageKey {
         }
         if self.parameters != old.parameters {
             out.push(parameter_differences(&old.parameters, &self.parameters));
+        } else if self.resolved != old.resolved {
+            out.push(format!("resolved {}", parameter_differences(&old.resolved, &self.resolved)));
         }
         let old_roles: Vec<&String> = old.inputs.iter().map(|(r, _)| r).collect();
         let new_roles: Vec<&String> = self.inputs.iter().map(|(r, _)| r).collect();
@@ -140,7 +178,8 @@ pub struct Cache {
 #[derive(Debug)]
 pub struct Hit {
     pub hash: ContentHash,
-    pub summary: serde_json::Value,
+    /// The bytes of the entry's `summary.json` (parsed, typed, by the stage runner).
+    pub summary: Vec<u8>,
 }
 
 impl Cache {
@@ -163,53 +202,105 @@ impl Cache {
         let dir = self.entry_dir(key);
         let path = dir.join("artifact.dsa");
         let bytes = fs::read(&path).ok()?;
-        match artifact::check_artifact::<T>(&path, &bytes) {
-            Ok(header) => {
-                let summary = fs::read(dir.join("summary.json"))
-                    .ok()
-                    .and_then(|b| serde_json::from_slice(&b).ok())
-                    .unwrap_or(serde_json::Value::Null);
-                Some(Hit { hash: header.checksum, summary })
-            }
+        match artifact::check_artifact::<T>(&path, &bytes).map_err(|e| e.to_string()).and_then(|header| {
+            self.check_identity(key, &dir, &bytes)?;
+            Ok(header)
+        }) {
+            Ok(header) => match fs::read(dir.join("summary.json")) {
+                Ok(summary) => Some(Hit { hash: header.checksum, summary }),
+                Err(e) => {
+                    self.reject(key, &format!("{}: {e}", dir.join("summary.json").display()));
+                    None
+                }
+            },
             Err(e) => {
-                eprintln!("warning: cache entry rejected, recomputing: {e}");
-                let _ = fs::remove_dir_all(&dir);
+                self.reject(key, &e);
                 None
             }
         }
     }
 
-    /// Stores an artifact and its summary under `key`, atomically (temp folder, rename).
+    /// An entry is served only under its own key: its `key.json` and the producer inside
+    /// its artifact must both be this key's (an artifact copied in from another entry, or
+    /// a hand-edited one with a valid checksum, is refused).
+    fn check_identity(&self, key: &StageKey, dir: &Path, bytes: &[u8]) -> Result<(), String> {
+        let key_file = dir.join("key.json");
+        let stored: StageKey = desal_io::atomic::read_json(&key_file).map_err(|e| e.to_string())?;
+        if &stored != key {
+            return Err(format!("{} is another key's entry", key_file.display()));
+        }
+        let path = dir.join("artifact.dsa");
+        let (producer, _) = desal_io::codec::decode_prefix::<Producer>(&bytes[artifact::HEADER_LEN..])
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        let expected = key.producer(&[]);
+        let same_inputs = producer.inputs.len() == expected.inputs.len()
+            && producer
+                .inputs
+                .iter()
+                .zip(&expected.inputs)
+                .all(|(a, b)| a.role == b.role && a.hash == b.hash);
+        if producer.stage != expected.stage
+            || producer.stage_version != expected.stage_version
+            || producer.parameters != expected.parameters
+            || !same_inputs
+        {
+            return Err(format!("{}: its producer is not the key it is filed under", path.display()));
+        }
+        Ok(())
+    }
+
+    /// Reports a broken entry on stderr and evicts it, so the stage is recomputed.
+    pub fn reject(&self, key: &StageKey, why: &str) {
+        eprintln!("warning: cache entry rejected, recomputing: {why}");
+        self.evict(key);
+    }
+
+    /// Removes the entry for `key`, if any: renamed out of its place first, then deleted,
+    /// so a run killed halfway leaves a stray folder that no lookup reads, never a
+    /// half-deleted entry under its key.
+    pub fn evict(&self, key: &StageKey) {
+        let dir = self.entry_dir(key);
+        let parent = dir.parent().expect("entry has a parent");
+        static EVICTED: AtomicU64 = AtomicU64::new(0);
+        let n = EVICTED.fetch_add(1, Ordering::Relaxed);
+        // Named as desal_io's leftovers are, so a kill between the two steps leaves
+        // something the next store in this folder removes.
+        let trash = parent.join(format!(".{}.old-{}-{n}", key.hash().to_hex(), std::process::id()));
+        if fs::rename(&dir, &trash).is_ok() {
+            let _ = fs::remove_dir_all(&trash);
+        }
+    }
+
+    /// Stores an artifact and its summary under `key`, atomically (temp folder, rename;
+    /// [`desal_io::create_dir_once`]: the first complete writer wins).
     /// Returns the artifact's content hash.
     pub fn store<T: ArtifactBody>(
         &self,
         key: &StageKey,
         producer: &Producer,
         body: &T,
-        summary: &serde_json::Value,
+        summary: &impl Serialize,
     ) -> Result<ContentHash> {
-        static COUNTER: AtomicU64 = AtomicU64::new(0);
         let dir = self.entry_dir(key);
-        let parent = dir.parent().expect("entry has a parent");
-        fs::create_dir_all(parent)
-            .with_context(|| format!("cannot create cache folder {}", parent.display()))?;
-        let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let tmp = parent.join(format!(".tmp-{}-{}-{n}", key.hash().short(), std::process::id()));
-        let _ = fs::remove_dir_all(&tmp);
-        fs::create_dir_all(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
-        let hash = artifact::write_artifact(&tmp.join("artifact.dsa"), producer, body)?;
-        fault_point(&key.stage);
-        desal_io::write_json(&tmp.join("summary.json"), summary)?;
-        desal_io::write_json(&tmp.join("key.json"), key)?;
-        if dir.exists() {
-            // A concurrent run (another shard) stored the same key first; both are equal.
-            let _ = fs::remove_dir_all(&tmp);
-        } else if let Err(e) = fs::rename(&tmp, &dir) {
-            let _ = fs::remove_dir_all(&tmp);
-            if !dir.exists() {
-                return Err(e).with_context(|| format!("cannot move cache entry into {}", dir.display()));
+        let mut hash = None;
+        desal_io::create_dir_once(&dir, |tmp| -> Result<()> {
+            hash = Some(artifact::write_artifact(&tmp.join("artifact.dsa"), producer, body)?);
+            fault_point(&key.stage);
+            desal_io::write_json(&tmp.join("summary.json"), summary)?;
+            desal_io::write_json(&tmp.join("key.json"), key)?;
+            Ok(())
+        })
+        .with_context(|| format!("cannot store cache entry {}", dir.display()))?;
+        // When another run (a shard) stored the same key first, its entry is used: both
+        // are equal by the key's construction, and the entry's own checksum says so.
+        let hash = match hash {
+            Some(hash) => hash,
+            None => {
+                let path = dir.join("artifact.dsa");
+                let bytes = fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
+                artifact::check_artifact::<T>(&path, &bytes)?.checksum
             }
-        }
+        };
         Ok(hash)
     }
 
@@ -233,7 +324,11 @@ impl Cache {
 
     /// Records `key` as the last run of its stage for `dataset`.
     pub fn record(&self, dataset: &str, key: &StageKey) -> Result<()> {
-        Ok(desal_io::write_json(&self.explain_path(dataset, &key.stage), key)?)
+        let path = self.explain_path(dataset, &key.stage);
+        if let Some(dir) = path.parent() {
+            desal_io::dir::remove_leftovers(dir);
+        }
+        Ok(desal_io::write_json(&path, key)?)
     }
 }
 
@@ -260,6 +355,7 @@ mod tests {
             stage_version: 1,
             format_version: 1,
             parameters: r#"{"placement":"optimal","target_vertices":2500}"#.into(),
+            resolved: r#"{"boundary_weight":10.0}"#.into(),
             inputs: vec![("poses".into(), ContentHash([1; 32])), ("saliency".into(), ContentHash([2; 32]))],
         }
     }
@@ -280,6 +376,9 @@ mod tests {
         let mut k = key();
         k.parameters = r#"{"placement":"subset","target_vertices":2500}"#.into();
         assert_ne!(k.hash(), base);
+        let mut k = key();
+        k.resolved = r#"{"boundary_weight":5.0}"#.into();
+        assert_ne!(k.hash(), base, "a changed default changes the key");
         let mut k = key();
         k.inputs[1].1 = ContentHash([3; 32]);
         assert_ne!(k.hash(), base);

@@ -7,9 +7,13 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use desal_io::artifact::{self, ArtifactBody, FitV1, LabelsV1, PoseSetV1, SaliencyV1};
 use desal_mesh::NoProgress;
+use desal_simplify::{Metric, Placement, SimplifyConfig};
 
-use crate::pipeline::{FitParams, SaliencyParams};
+use crate::outputs::{FileWriter, write_all_or_nothing};
 use crate::stages;
+use crate::stages::fit::FitParams;
+use crate::stages::ingest::clean_faces_with_warnings;
+use crate::stages::saliency::SaliencyParams;
 
 /// `desal fit`: stage 1 on an ingested pose set and labels.
 #[derive(Debug, clap::Args)]
@@ -24,8 +28,8 @@ pub struct FitArgs {
     #[arg(long, short)]
     pub output: PathBuf,
     /// `rigid` (Kabsch) or `affine` (the paper's literal fit, for the ablation).
-    #[arg(long, default_value = "rigid")]
-    pub method: String,
+    #[arg(long, default_value_t = FitParams::default().method)]
+    pub method: desal_fit::FitModel,
 }
 
 /// `desal saliency`: stage 2 on a fit.
@@ -43,8 +47,8 @@ pub struct SaliencyArgs {
     /// Sum squared residual distances.
     #[arg(long)]
     pub squared: bool,
-    /// Normalise by this percentile of the per-vertex sums (100 = the maximum).
-    #[arg(long, default_value_t = 100.0)]
+    /// Normalise by this percentile of the per-vertex sums, in (0, 100] (100 = the maximum).
+    #[arg(long, default_value_t = SaliencyParams::default().percentile)]
     pub percentile: f64,
     /// Leave this pose out of the sum (repeatable).
     #[arg(long)]
@@ -113,38 +117,31 @@ pub struct SimplifyArgs {
     /// or replacing an artifact's floor. Default: the artifact's, else 0.05.
     #[arg(long)]
     pub floor: Option<f64>,
-    /// Where a collapsed edge's vertex goes.
-    #[arg(long, value_enum, default_value_t = PlacementArg::Optimal)]
-    pub placement: PlacementArg,
-    /// Drop the edge-length ("balancing") factor of the cost, which is on when
-    /// `--saliency` is given (the paper's method) and off otherwise (plain QSlim).
+    /// Where a collapsed edge's vertex goes: `optimal` (the paper) or `subset` (keep
+    /// original vertices).
+    #[arg(long, default_value_t = SimplifyConfig::default().placement)]
+    pub placement: Placement,
+    /// Multiply the cost by the edge length (the paper's "balancing" term; with
+    /// `--saliency` this is the paper's method). Off by default, as in pipeline files.
     #[arg(long)]
-    pub no_balance: bool,
+    pub balance: bool,
     /// The error the collapses minimise: `quadric` (Garland–Heckbert, the paper's Q) or
     /// `lindstrom-turk` (memoryless volume and boundary preservation, CGAL's default;
     /// lower surface error on a single mesh, see BENCHMARKS.md).
-    #[arg(long, value_enum, default_value_t = MetricArg::Quadric)]
-    pub metric: MetricArg,
+    #[arg(long, default_value_t = SimplifyConfig::default().metric)]
+    pub metric: Metric,
+    /// Weight of the boundary constraint quadrics (see `boundary_weight` in
+    /// pipelines/README.md).
+    #[arg(long, default_value_t = SimplifyConfig::default().boundary_weight)]
+    pub boundary_weight: f64,
     /// Refuse collapses that leave a face more than this many degrees from the input
     /// normals of its corners' vertices (the fold guard; 180 switches it off).
-    #[arg(long, default_value_t = 70.0)]
+    #[arg(long, default_value_t = SimplifyConfig::default().max_corner_normal_deg)]
     pub max_corner_normal_deg: f64,
     /// Run the simplification this many times and print SIMPLIFY_SECONDS=<best>
     /// (simplification alone, no I/O), for the peers' benchmark harness.
     #[arg(long)]
     pub repeat: Option<usize>,
-}
-
-#[derive(Debug, Clone, Copy, clap::ValueEnum)]
-pub enum PlacementArg {
-    Optimal,
-    Subset,
-}
-
-#[derive(Debug, Clone, Copy, clap::ValueEnum)]
-pub enum MetricArg {
-    Quadric,
-    LindstromTurk,
 }
 
 fn read<T: ArtifactBody>(path: &Path) -> Result<(T, desal_io::ContentHash)> {
@@ -166,11 +163,11 @@ pub fn fit(args: &FitArgs) -> Result<()> {
     labels
         .check_vertex_count(set.vertex_count())
         .with_context(|| format!("{} does not belong to {}", args.labels.display(), args.poses.display()))?;
-    let params = FitParams { method: args.method.clone() };
-    let key = stages::fit::key(&params, poses_hash, labels_hash);
-    let (body, _, note) = stages::fit::compute(&params, &set, &labels, &NoProgress)?;
-    artifact::write_artifact(&args.output, &key.producer(&[]), &body)?;
-    done(&note, &args.output);
+    let params = FitParams { method: args.method };
+    let key = params.key(poses_hash, labels_hash);
+    let out = stages::fit::compute(&params, &set, &labels, &NoProgress)?;
+    artifact::write_artifact(&args.output, &key.producer(&[]), &out.body)?;
+    done(&out.note, &args.output);
     Ok(())
 }
 
@@ -178,7 +175,10 @@ pub fn saliency(args: &SaliencyArgs) -> Result<()> {
     let (poses, poses_hash) = read::<PoseSetV1>(&args.poses)?;
     let (fit, fit_hash) = read::<FitV1>(&args.fit)?;
     let set = poses.to_pose_set().with_context(|| format!("{}", args.poses.display()))?;
-    if fit.vertex_count as usize != set.vertex_count() || fit.pose_names != set.names {
+    if fit.vertex_count as usize != set.vertex_count()
+        || fit.pose_names != set.names
+        || fit.template as usize != set.template
+    {
         anyhow::bail!(
             "{} was not made from {}: its poses or vertex count differ",
             args.fit.display(),
@@ -192,9 +192,10 @@ pub fn saliency(args: &SaliencyArgs) -> Result<()> {
         floor: args.floor,
     };
     let template = set.template_mesh();
-    let key = stages::saliency::key(&params, poses_hash, fit_hash);
-    let (body, _, note): (SaliencyV1, _, _) = stages::saliency::compute(&params, &fit, template.diagonal())?;
+    let key = params.key(poses_hash, fit_hash)?;
     let up = crate::pictures::parse_up_axis(args.up_axis.as_deref())?;
+    let out = stages::saliency::compute(&params, &fit, template.diagonal())?;
+    let (body, note): (SaliencyV1, _) = (out.body, out.note);
     // Render before writing anything, so a failure leaves no partial output.
     let png = match &args.png {
         Some(_) => Some(crate::pictures::heatmap_png(
@@ -207,13 +208,22 @@ pub fn saliency(args: &SaliencyArgs) -> Result<()> {
         )?),
         None => None,
     };
-    artifact::write_artifact(&args.output, &key.producer(&[]), &body)?;
+    let saliency = body.saliency.clone();
+    let producer = key.producer(&[]);
+    let mut files: Vec<(PathBuf, FileWriter)> = vec![(
+        args.output.clone(),
+        Box::new(move |p| Ok(artifact::write_artifact(p, &producer, &body).map(|_| ())?)),
+    )];
     if let (Some(path), Some(png)) = (&args.png, png) {
-        desal_io::write_atomic(path, &png)?;
+        files.push((path.clone(), Box::new(move |p| Ok(desal_io::write_atomic(p, &png)?))));
     }
     if let Some(path) = &args.ply {
-        crate::pictures::write_scalar_ply(path, &template, "saliency", &body.saliency)?;
+        files.push((
+            path.clone(),
+            Box::new(move |p| crate::pictures::write_scalar_ply(p, &template, "saliency", &saliency)),
+        ));
     }
+    write_all_or_nothing(files)?;
     done(&note, &args.output);
     Ok(())
 }
@@ -231,27 +241,31 @@ pub fn map(args: &MapArgs) -> Result<()> {
         let bytes = std::fs::read(&args.simplified)
             .with_context(|| format!("cannot read {}", args.simplified.display()))?;
         let mut mesh = desal_io::read_mesh(&args.simplified)?;
-        mesh.faces = crate::ingest::clean_faces_with_warnings(&args.simplified, &mesh.faces).0;
+        mesh.faces = clean_faces_with_warnings(&args.simplified, &mesh.faces).0;
         (stages::simplify::external(&mesh), desal_io::ContentHash::of(&bytes))
     };
     let key = stages::map::key(poses_hash, simplified_hash);
-    let (body, _, note) = stages::map::compute(&simplified, &set, &labels)
+    let out = stages::map::compute(&simplified, &set, &labels)
         .with_context(|| format!("mapping {} onto {}", args.simplified.display(), args.poses.display()))?;
-    let (simple_set, simple_labels) = stages::map::apply(&body, &set, &labels)?;
-    // The folder first: it is the step that fails on a bad path, and then no artifact
-    // claims a result that was not written.
+    let (simple_set, simple_labels) = stages::map::apply(&out.body, &set, &labels)?;
+    // The folder first, whole or not at all (it is the step that fails on a bad path),
+    // and then no artifact claims a result that was not written.
     if let Some(dir) = &args.out_dir {
-        stages::map::write_pose_set(dir, &body, &simple_set, &simple_labels)?;
+        crate::outputs::check_output_folder(dir)?;
+        let files = crate::outputs::simplified_pose_set("", &out.body, simple_set, simple_labels);
+        desal_io::replace_dir(dir, &[], |tmp| -> Result<()> {
+            crate::outputs::DatasetOutputs { artifacts: Vec::new(), files }.write_into(tmp)
+        })?;
     }
-    artifact::write_artifact(&args.output, &key.producer(&[]), &body)?;
-    done(&note, &args.output);
+    artifact::write_artifact(&args.output, &key.producer(&[]), &out.body)?;
+    done(&out.note, &args.output);
     Ok(())
 }
 
 pub fn simplify(args: &SimplifyArgs) -> Result<()> {
-    use desal_simplify::{Metric, Placement, SimplifyConfig, SimplifyInput, Target};
+    use desal_simplify::{SimplifyInput, Target};
     let mut mesh = desal_io::read_mesh(&args.input)?;
-    mesh.faces = crate::ingest::clean_faces_with_warnings(&args.input, &mesh.faces).0;
+    mesh.faces = clean_faces_with_warnings(&args.input, &mesh.faces).0;
     let weights = match &args.saliency {
         Some(path) => Some(read_weights(path, args.floor, mesh.vertex_count())?),
         None => None,
@@ -264,19 +278,15 @@ pub fn simplify(args: &SimplifyArgs) -> Result<()> {
     };
     let config = SimplifyConfig {
         target,
-        placement: match args.placement {
-            PlacementArg::Optimal => Placement::Optimal,
-            PlacementArg::Subset => Placement::Subset,
-        },
+        placement: args.placement,
         saliency: weights.is_some(),
-        balance: weights.is_some() && !args.no_balance,
-        metric: match args.metric {
-            MetricArg::Quadric => Metric::Quadric,
-            MetricArg::LindstromTurk => Metric::LindstromTurk,
-        },
+        balance: args.balance,
+        metric: args.metric,
+        boundary_weight: args.boundary_weight,
         max_corner_normal_deg: args.max_corner_normal_deg,
         ..SimplifyConfig::default()
     };
+    config.validate()?;
     let mut input = SimplifyInput::new(&mesh);
     if let Some(w) = &weights {
         input = input.with_weights(w);
@@ -312,7 +322,7 @@ fn read_weights(path: &Path, floor: Option<f64>, vertex_count: usize) -> Result<
             None => body.weights,
             Some(f) => {
                 let f = floor_of(f)?;
-                body.saliency.iter().map(|s| f + (1.0 - f) * s).collect()
+                body.saliency.iter().map(|&s| desal_saliency::weight(s, f)).collect()
             }
         }
     } else {
@@ -321,7 +331,7 @@ fn read_weights(path: &Path, floor: Option<f64>, vertex_count: usize) -> Result<
         if let Some((v, s)) = saliency.iter().enumerate().find(|(_, s)| !(0.0..=1.0).contains(*s)) {
             anyhow::bail!("{}: saliency of vertex {v} is {s}, outside [0, 1]", path.display());
         }
-        saliency.iter().map(|s| f + (1.0 - f) * s).collect()
+        saliency.iter().map(|&s| desal_saliency::weight(s, f)).collect()
     };
     anyhow::ensure!(
         weights.len() == vertex_count,
@@ -352,4 +362,62 @@ fn read_saliency_values(path: &Path) -> Result<Vec<f64>> {
                 .with_context(|| format!("{}:{}: `{line}` is not a number", path.display(), i + 1))
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Debug, Parser)]
+    struct Simplify {
+        #[command(flatten)]
+        args: SimplifyArgs,
+    }
+
+    #[derive(Debug, Parser)]
+    struct Fit {
+        #[command(flatten)]
+        args: FitArgs,
+    }
+
+    #[derive(Debug, Parser)]
+    struct Saliency {
+        #[command(flatten)]
+        args: SaliencyArgs,
+    }
+
+    /// The one table of defaults (README "Defaults"): the library, pipeline files and the
+    /// CLI agree on every knob they share.
+    #[test]
+    fn cli_pipeline_and_library_defaults_agree() {
+        let cli =
+            Simplify::try_parse_from(["desal-simplify", "--input", "a", "--output", "b", "--ratio", "0.5"])
+                .unwrap()
+                .args;
+        let library = SimplifyConfig::default();
+        let pipeline = stages::simplify::SimplifyParams::default().config().unwrap();
+        assert_eq!(pipeline, library, "pipeline files resolve to the library's defaults");
+        assert_eq!(cli.placement, library.placement);
+        assert_eq!(cli.balance, library.balance);
+        assert_eq!(cli.metric, library.metric);
+        assert_eq!(cli.boundary_weight, library.boundary_weight);
+        assert_eq!(cli.max_corner_normal_deg, library.max_corner_normal_deg);
+
+        let cli =
+            Fit::try_parse_from(["desal-fit", "--poses", "p", "--labels", "l", "-o", "o"]).unwrap().args;
+        assert_eq!(cli.method, FitParams::default().method);
+        assert_eq!(FitParams::default().config(), desal_fit::FitConfig::default());
+
+        let cli = Saliency::try_parse_from(["desal-saliency", "--poses", "p", "--fit", "f", "-o", "o"])
+            .unwrap()
+            .args;
+        let library = desal_saliency::SaliencyConfig::default();
+        let params = SaliencyParams::default();
+        assert_eq!(params.config().unwrap(), library);
+        assert_eq!(
+            (cli.percentile, cli.squared, cli.floor),
+            (params.percentile, params.squared, params.floor)
+        );
+    }
 }

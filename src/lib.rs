@@ -8,8 +8,8 @@
 pub mod cache;
 pub mod cli;
 pub mod evaluate;
-pub mod ingest;
 pub mod inspect;
+pub mod outputs;
 pub mod pictures;
 pub mod pipeline;
 pub mod progress;

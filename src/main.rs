@@ -7,7 +7,8 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use desal::progress::ProgressMode;
-use desal::run::{RunOptions, Shard, Stage};
+use desal::run::{RunOptions, Shard};
+use desal::stages::runner::Stage;
 
 #[derive(Debug, Parser)]
 #[command(

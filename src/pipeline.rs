@@ -10,6 +10,12 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 
+use crate::stages::DatasetInputs;
+use crate::stages::fit::FitParams;
+use crate::stages::ingest::{IngestParams, TemplateSpec, pose_name};
+use crate::stages::saliency::SaliencyParams;
+use crate::stages::simplify::{SimplifyParams, TARGET_KEYS};
+
 /// The pipeline file schema this build reads.
 pub const SCHEMA: u32 = 1;
 
@@ -59,89 +65,6 @@ pub enum PosesSpec {
     List(Vec<String>),
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(untagged)]
-pub enum TemplateSpec {
-    Index(usize),
-    Name(String),
-}
-
-/// Stage 1 parameters.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct FitParams {
-    /// `rigid` (Kabsch, proper rotations; the default) or `affine` (the paper's literal
-    /// unconstrained fit, for the ablation).
-    pub method: String,
-}
-
-impl Default for FitParams {
-    fn default() -> Self {
-        FitParams { method: "rigid".into() }
-    }
-}
-
-/// Stage 2 parameters.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct SaliencyParams {
-    /// Sum squared residual distances instead of plain ones.
-    pub squared: bool,
-    /// Normalise by this percentile of the per-vertex sums (100 = the maximum).
-    pub percentile: f64,
-    /// Pose names left out of the sum.
-    pub exclude: Vec<String>,
-    /// Weight floor: stage 3 uses `floor + (1 - floor) * saliency`.
-    pub floor: Option<f64>,
-}
-
-impl Default for SaliencyParams {
-    fn default() -> Self {
-        SaliencyParams { squared: false, percentile: 100.0, exclude: Vec::new(), floor: None }
-    }
-}
-
-/// The keys of `[simplify]` that name its target; at most one may be given.
-const TARGET_KEYS: [&str; 3] = ["target_vertices", "target_faces", "ratio"];
-
-/// Stage 3 parameters.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct SimplifyParams {
-    /// Target vertex count (the paper: 2500). At most one of the three targets is
-    /// given; none means `ratio = 0.2`.
-    pub target_vertices: Option<usize>,
-    pub target_faces: Option<usize>,
-    /// Target as a fraction of the input face count.
-    pub ratio: Option<f64>,
-    /// `optimal` (the paper) or `subset` (keep original vertices).
-    pub placement: String,
-    /// Weight the cost by deformation saliency.
-    pub saliency: bool,
-    /// Multiply the cost by the edge length (the paper's balance term).
-    pub balance: bool,
-    /// Keep part borders (lock vertices on the border between two parts).
-    pub keep_part_borders: bool,
-    /// `quadric` (Garland–Heckbert, the paper's) or `lindstrom-turk` (memoryless,
-    /// CGAL's default; lower surface error on one mesh, see BENCHMARKS.md).
-    pub metric: String,
-}
-
-impl Default for SimplifyParams {
-    fn default() -> Self {
-        SimplifyParams {
-            target_vertices: None,
-            target_faces: None,
-            ratio: None,
-            placement: "optimal".into(),
-            saliency: true,
-            balance: true,
-            keep_part_borders: false,
-            metric: "quadric".into(),
-        }
-    }
-}
-
 /// A dataset ready to run: the parsed table plus resolved absolute paths.
 #[derive(Debug, Clone)]
 pub struct Dataset {
@@ -151,6 +74,23 @@ pub struct Dataset {
     pub labels_file: PathBuf,
     /// Where this dataset's outputs go.
     pub out_dir: PathBuf,
+}
+
+impl Dataset {
+    /// What the stages read.
+    pub fn inputs(&self) -> DatasetInputs<'_> {
+        DatasetInputs {
+            ingest: IngestParams {
+                pose_files: &self.pose_files,
+                template: self.spec.template.as_ref(),
+                ignore_pose_faces: self.spec.ignore_pose_faces,
+            },
+            labels_file: &self.labels_file,
+            fit: &self.spec.fit,
+            saliency: &self.spec.saliency,
+            simplify: &self.spec.simplify,
+        }
+    }
 }
 
 /// A parsed pipeline file.
@@ -216,16 +156,15 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
 /// The stage parameters that can be checked without reading a mesh: fit method,
 /// saliency options and excluded pose names, simplify target and options, up axis.
 fn check_parameters(spec: &DatasetToml, pose_files: &[PathBuf]) -> Result<()> {
-    crate::stages::fit::config(&spec.fit)?;
-    crate::stages::saliency::config(&spec.saliency).validate()?;
-    let names: Vec<String> = pose_files.iter().map(|f| crate::ingest::pose_name(f)).collect();
+    spec.saliency.config()?;
+    let names: Vec<String> = pose_files.iter().map(|f| pose_name(f)).collect();
     if let Some(unknown) = spec.saliency.exclude.iter().find(|e| !names.contains(e)) {
         bail!(
             "saliency.exclude names pose '{unknown}', which is not in the pose list ({} poses)",
             names.len()
         );
     }
-    crate::stages::simplify::config(&spec.simplify)?;
+    spec.simplify.config()?;
     crate::pictures::parse_up_axis(spec.up_axis.as_deref())?;
     Ok(())
 }
@@ -294,14 +233,6 @@ fn resolve_poses(base: &Path, spec: &PosesSpec) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-/// Canonical JSON of a parameter struct: sorted keys, no whitespace. This is the form
-/// that enters cache keys and artifact producers.
-pub fn canonical_json<T: Serialize>(value: &T) -> String {
-    // serde_json's Map is a BTreeMap (no `preserve_order` feature), so keys come out sorted.
-    let v = serde_json::to_value(value).expect("parameters serialise");
-    serde_json::to_string(&v).expect("a JSON value serialises")
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -326,8 +257,12 @@ target_vertices = 50
         let p = parse(&dir.path().join("p.toml"), text, None).unwrap();
         let d = &p.datasets[0];
         assert_eq!(d.spec.simplify.target_vertices, Some(50));
-        assert_eq!(d.spec.simplify.placement, "subset");
-        assert!(d.spec.simplify.balance, "unset keys keep their defaults");
+        assert_eq!(d.spec.simplify.placement, desal_simplify::Placement::Subset);
+        assert_eq!(
+            d.spec.simplify.balance,
+            SimplifyParams::default().balance,
+            "unset keys keep their defaults"
+        );
         assert_eq!(d.labels_file, dir.path().join("labels.txt"));
         assert_eq!(d.out_dir, dir.path().join("results").join("one"));
     }
@@ -362,11 +297,5 @@ target_vertices = 50
         let text = format!("{head}[dataset.simplify]\ntarget_vertices = 100\ntarget_faces = 200\n");
         let err = format!("{:#}", parse(p, &text, None).unwrap_err());
         assert!(err.contains("dataset 'a'") && err.contains("not several"), "{err}");
-    }
-
-    #[test]
-    fn canonical_json_sorts_keys() {
-        let json = canonical_json(&SimplifyParams::default());
-        assert!(json.starts_with("{\"balance\":true,\"keep_part_borders\":false"), "{json}");
     }
 }

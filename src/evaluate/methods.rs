@@ -17,39 +17,12 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use desal_map::{MapConfig, MapMode, MapOutput};
-use desal_mesh::{PartLabels, PoseSet, TriMesh};
-use desal_simplify::{Placement, SimplifyConfig, SimplifyInput, StopReason, Target};
+use desal_map::MapOutput;
+use desal_mesh::{NoProgress, PartLabels, PoseSet, TriMesh};
+use desal_simplify::{Placement, SimplifyConfig, StopReason, Target};
 
-/// Which factors of the paper's cost (Eq. 5) are on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Cost {
-    /// Plain quadric error (Garland & Heckbert 1997).
-    Qslim,
-    /// Quadric error × mean saliency weight of the edge.
-    Saliency,
-    /// Quadric error × mean saliency weight × edge length (the paper).
-    Paper,
-}
-
-impl Cost {
-    fn name(self) -> &'static str {
-        match self {
-            Cost::Qslim => "qslim",
-            Cost::Saliency => "saliency",
-            Cost::Paper => "paper",
-        }
-    }
-
-    /// `(saliency, balance)` switches of [`SimplifyConfig`].
-    pub fn switches(self) -> (bool, bool) {
-        match self {
-            Cost::Qslim => (false, false),
-            Cost::Saliency => (true, false),
-            Cost::Paper => (true, true),
-        }
-    }
-}
+pub use crate::stages::simplify::Cost;
+use crate::stages::{map, simplify};
 
 /// One method of the comparison.
 #[derive(Debug, Clone, PartialEq)]
@@ -80,7 +53,7 @@ impl Method {
     /// The method's name in tables, file names and `eval.json`.
     pub fn name(&self) -> String {
         match self {
-            Method::Quadric { cost, placement } => format!("{}-{}", cost.name(), placement_name(*placement)),
+            Method::Quadric { cost, placement } => format!("{}-{}", cost.name(), placement.name()),
             Method::Multipose => "multipose".into(),
             Method::External { name, .. } => name.clone(),
         }
@@ -104,17 +77,8 @@ impl Method {
             return Ok(Method::Multipose);
         }
         let (cost, placement) = text.split_once('-').with_context(|| unknown(text))?;
-        let cost = match cost {
-            "qslim" => Cost::Qslim,
-            "saliency" => Cost::Saliency,
-            "paper" => Cost::Paper,
-            _ => bail!(unknown(text)),
-        };
-        let placement = match placement {
-            "optimal" => Placement::Optimal,
-            "subset" => Placement::Subset,
-            _ => bail!(unknown(text)),
-        };
+        let cost: Cost = cost.parse().map_err(|_| anyhow::anyhow!(unknown(text)))?;
+        let placement: Placement = placement.parse().map_err(|_| anyhow::anyhow!(unknown(text)))?;
         Ok(Method::Quadric { cost, placement })
     }
 
@@ -146,17 +110,10 @@ impl Method {
     /// `optimal`, `subset` or `external`, for reports.
     pub fn placement(&self) -> &'static str {
         match self {
-            Method::Quadric { placement, .. } => placement_name(*placement),
+            Method::Quadric { placement, .. } => placement.name(),
             Method::Multipose => "subset",
             Method::External { .. } => "external",
         }
-    }
-}
-
-fn placement_name(placement: Placement) -> &'static str {
-    match placement {
-        Placement::Optimal => "optimal",
-        Placement::Subset => "subset",
     }
 }
 
@@ -209,7 +166,7 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
     let name = method.name();
     let started = Instant::now();
     let template = inputs.poses.template_mesh();
-    let (raw, kept, stop, note) = match method {
+    let (body, stop, note) = match method {
         Method::Quadric { cost, placement } => {
             let (saliency, balance) = cost.switches();
             let config = SimplifyConfig {
@@ -219,23 +176,13 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 balance,
                 ..inputs.base_config.clone()
             };
-            let mut input = SimplifyInput::new(&template);
-            if saliency {
-                input = input.with_weights(&inputs.weights);
-            }
-            if config.part_borders != desal_simplify::PartBorders::Ignore {
-                input = input.with_part_labels(&inputs.labels.labels);
-            }
-            let result =
-                desal_simplify::simplify(&input, &config).with_context(|| format!("{name}: stage 3"))?;
-            let kept = if *placement == Placement::Subset { result.subset_indices() } else { None };
-            (result.mesh, kept, Some(result.report.stop), result.report.to_string())
+            let out = simplify::compute(&config, &template, &inputs.weights, &inputs.labels, &NoProgress)
+                .with_context(|| format!("{name}: stage 3"))?;
+            (out.body, Some(out.summary.stop), out.note)
         }
         Method::Multipose => {
             let config =
                 SimplifyConfig { target, saliency: false, balance: false, ..inputs.base_config.clone() };
-            let labels = (config.part_borders != desal_simplify::PartBorders::Ignore)
-                .then_some(inputs.labels.labels.as_slice());
             let poses = &inputs.poses;
             let seen = &inputs.simplification_poses;
             // A copy of the pose set only when `[saliency] exclude` hides some poses.
@@ -254,10 +201,9 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 };
                 &subset
             };
-            let result = desal_simplify::simplify_multipose(quadric_poses, None, labels, &config)
+            let out = simplify::compute_multipose(&config, quadric_poses, &inputs.labels)
                 .with_context(|| format!("{name}: multi-pose simplification"))?;
-            let kept = result.subset_indices();
-            (result.mesh, kept, Some(result.report.stop), result.report.to_string())
+            (out.body, Some(out.summary.stop), out.note)
         }
         Method::External { path, .. } => {
             let mesh =
@@ -265,16 +211,12 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
             let mesh = compact(&mesh);
             let note =
                 format!("{} ({} vertices, {} faces)", path.display(), mesh.vertex_count(), mesh.face_count());
-            (mesh, None, None, note)
+            (simplify::external(&mesh), None, note)
         }
     };
     let simplify_seconds = started.elapsed().as_secs_f64();
-
-    let mode = match &kept {
-        Some(kept_orig) => MapMode::Subset { kept_orig },
-        None => MapMode::Greedy,
-    };
-    let mapped = desal_map::map_pose_set(&MapConfig::default(), mode, &raw, &inputs.poses, &inputs.labels)
+    let raw = simplify::mesh(&body);
+    let mapped = map::map(&body, &inputs.poses, &inputs.labels)
         .with_context(|| format!("{name}: stage 4 (mapping to original vertices)"))?;
     check_parts(&name, &mapped)?;
     Ok(SimplifiedSet { raw, mapped, stop, note, simplify_seconds })

@@ -4,7 +4,8 @@
 //!
 //! The story of [`eval`], per dataset of the pipeline file:
 //! 1. run the pipeline's cached stages (`desal run`), so the inputs are validated
-//!    artifacts, and read the pose set, labels and stage-3 saliency weights;
+//!    artifacts, and take the pose set, labels and stage-3 saliency weights from their
+//!    results in-process;
 //! 2. per method ([`methods`]): simplify the template, map it to original vertices,
 //!    then [`measure::deform`]: part rotations on the simplified set, the SCAPE model
 //!    in-sample and per held-out fold, every pose synthesised;
@@ -15,7 +16,7 @@
 //!    folder, which then replaces `<out>/<dataset>/eval` whole.
 //!
 //! `desal run` replaces `<out>/<dataset>` whole when its own outputs change but carries
-//! the `eval/` folder over (`run::KEPT_SUBFOLDER`).
+//! the `eval/` folder over (`outputs::KEPT_SUBFOLDER`).
 
 pub mod figures;
 pub mod measure;
@@ -28,15 +29,15 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use desal_io::artifact::{LabelsV1, PoseSetV1, SaliencyV1, read_artifact};
 use desal_io::ply::{PlyWriteOptions, write_ply};
 use desal_mesh::{PoseSet, TriMesh, Vec3};
-use desal_simplify::{StopReason, Target};
+use desal_simplify::Target;
 use rayon::prelude::*;
 
 use crate::pipeline::{Dataset, Pipeline};
 use crate::progress::ProgressMode;
-use crate::run::RunOptions;
+use crate::run::{DatasetRun, RunOptions};
+use crate::stages::DatasetStages;
 use figures::{GridRow, Views};
 use measure::{Deformed, MeanStd, Measured, Run};
 use methods::{BASELINE, Inputs, Method, SimplifiedSet};
@@ -108,9 +109,10 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
         progress: if args.quiet { ProgressMode::Quiet } else { ProgressMode::Auto },
         ..RunOptions::default()
     };
-    crate::run::run(&pipeline, &options).context("running the pipeline's stages")?;
-    for dataset in &pipeline.datasets {
-        let dir = evaluate_dataset(&pipeline, dataset, &methods, args)
+    let runs = crate::run::run_with_stages(&pipeline, &options).context("running the pipeline's stages")?;
+    for DatasetRun { dataset, stages, .. } in &runs {
+        let dataset = &pipeline.datasets[*dataset];
+        let dir = evaluate_dataset(&pipeline, dataset, stages, &methods, args)
             .with_context(|| format!("evaluating dataset '{}'", dataset.spec.name))?;
         println!("{}: {}", dataset.spec.name, dir.join("eval.md").display());
     }
@@ -128,6 +130,7 @@ struct MethodRun {
 fn evaluate_dataset(
     pipeline: &Pipeline,
     dataset: &Dataset,
+    stages: &DatasetStages,
     methods: &[Method],
     args: &EvalArgs,
 ) -> Result<PathBuf> {
@@ -138,17 +141,19 @@ fn evaluate_dataset(
             eprintln!("eval {name}: {message}");
         }
     };
-    let inputs = load_inputs(dataset)?;
+    let inputs = load_inputs(dataset, stages)?;
     let poses = &inputs.poses;
     let target = match args.target_vertices {
         Some(v) => Target::Vertices(v),
-        None => crate::stages::simplify::target(&dataset.spec.simplify),
+        None => dataset.spec.simplify.target(),
     };
     let folds = desal_eval::folds(poses.pose_count(), poses.template, args.folds);
     if folds.len() < 2 {
         bail!("held-out evaluation needs at least three poses (the template and two to hold out)");
     }
     let evaluated: Vec<usize> = (0..poses.pose_count()).filter(|&p| p != poses.template).collect();
+    // Checked now, so a bad --figure-poses fails before anything is computed.
+    figure_poses(poses, &evaluated, &args.figure_poses)?;
 
     // Step 2: simplify, map and deform, one method at a time (each runs in parallel).
     let mut prepared = Vec::new();
@@ -184,7 +189,7 @@ fn evaluate_dataset(
     let mut report = build_report(pipeline, dataset, &inputs, target, &folds, &evaluated, &runs, &regions);
     report.measure_seconds = measure_seconds;
     let eval_dir = dataset.out_dir.join("eval");
-    replace_dir(&eval_dir, |dir| {
+    desal_io::replace_dir(&eval_dir, &[], |dir| -> Result<()> {
         let mut files = write_figures(dir, dataset, &inputs, &evaluated, &runs, args)?;
         if args.save_deformed {
             save_deformed(dir, poses, &evaluated, &runs)?;
@@ -204,26 +209,17 @@ fn evaluate_dataset(
     Ok(eval_dir)
 }
 
-/// Reads the pipeline stages' artifacts of `dataset` (written by `desal run`).
-fn load_inputs(dataset: &Dataset) -> Result<Inputs> {
-    let dir = &dataset.out_dir;
-    let poses = read_artifact::<PoseSetV1>(&dir.join("poses.dsa"))?.1.to_pose_set()?;
-    let labels = read_artifact::<LabelsV1>(&dir.join("labels.dsa"))?.1.to_labels()?;
-    let saliency = read_artifact::<SaliencyV1>(&dir.join("saliency.dsa"))?.1;
-    if saliency.weights.len() != poses.vertex_count() {
-        bail!(
-            "{}: {} saliency weights for {} vertices; re-run `desal run`",
-            dir.join("saliency.dsa").display(),
-            saliency.weights.len(),
-            poses.vertex_count()
-        );
-    }
-    let base_config = crate::stages::simplify::config(&dataset.spec.simplify)?;
+/// What every method reads, from the pipeline stages' results.
+fn load_inputs(dataset: &Dataset, stages: &DatasetStages) -> Result<Inputs> {
+    let poses = stages.pose_set()?.clone();
+    let labels = stages.part_labels()?.clone();
+    let weights = stages.saliency.body()?.weights.clone();
+    let base_config = dataset.spec.simplify.config()?;
     let excluded = &dataset.spec.saliency.exclude;
     let simplification_poses = (0..poses.pose_count())
         .filter(|&p| p == poses.template || !excluded.contains(&poses.names[p]))
         .collect();
-    Ok(Inputs { poses, labels, weights: saliency.weights, simplification_poses, base_config })
+    Ok(Inputs { poses, labels, weights, simplification_poses, base_config })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -301,7 +297,7 @@ fn method_report(
         })
         .collect();
     let in_sample = &run.deformed.models[0];
-    let (edge_length_mean, edge_length_variance) = edge_lengths(&template);
+    let (edge_length_mean, edge_length_variance) = template.edge_length_stats();
     MethodReport {
         name: run.method.name(),
         placement: run.method.placement().into(),
@@ -311,10 +307,7 @@ fn method_report(
         },
         vertices: set.poses.vertex_count(),
         faces: set.poses.face_count(),
-        stop: run.set.stop.map(|s| match s {
-            StopReason::TargetReached => "target".into(),
-            StopReason::NoValidCollapse => "no-valid-collapse".into(),
-        }),
+        stop: run.set.stop.map(|s| s.name().into()),
         simplify_note: run.set.note.clone(),
         map_mode: set.report.mode.into(),
         displacement_mean: set.report.displacement.mean,
@@ -338,19 +331,6 @@ fn method_report(
             synthesis_total: run.deformed.models.iter().map(|m| m.synthesis_seconds).sum(),
         },
     }
-}
-
-/// Mean and population variance of the unique edge lengths (paper Fig. 3).
-fn edge_lengths(mesh: &TriMesh) -> (f64, f64) {
-    let topology = desal_mesh::EdgeTopology::new(&mesh.faces);
-    let lengths: Vec<f64> = topology
-        .edges
-        .iter()
-        .map(|&[a, b]| (mesh.positions[a as usize] - mesh.positions[b as usize]).norm())
-        .collect();
-    let n = lengths.len() as f64;
-    let mean = lengths.iter().sum::<f64>() / n;
-    (mean, lengths.iter().map(|l| (l - mean).powi(2)).sum::<f64>() / n)
 }
 
 /// The figure poses: the named ones, or four spread evenly over the evaluated poses.
@@ -502,25 +482,4 @@ fn save_deformed(dir: &Path, poses: &PoseSet, evaluated: &[usize], runs: &[Metho
         write_ply(path, mesh, &PlyWriteOptions::default())?;
         Ok(())
     })
-}
-
-/// Builds a folder's content in a temporary sibling, then swaps it into place, so
-/// `dir` is either the previous run's or this run's, never a mix.
-fn replace_dir(dir: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let parent = dir.parent().context("the eval folder has no parent")?;
-    let name = dir.file_name().context("the eval folder has no name")?.to_string_lossy().into_owned();
-    let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&tmp);
-    std::fs::create_dir_all(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
-    if let Err(e) = fill(&tmp) {
-        let _ = std::fs::remove_dir_all(&tmp);
-        return Err(e);
-    }
-    let old = parent.join(format!(".{name}.old-{}", std::process::id()));
-    if dir.exists() {
-        std::fs::rename(dir, &old).with_context(|| format!("cannot replace {}", dir.display()))?;
-    }
-    std::fs::rename(&tmp, dir).with_context(|| format!("cannot move results into {}", dir.display()))?;
-    let _ = std::fs::remove_dir_all(&old);
-    Ok(())
 }

@@ -1,46 +1,87 @@
-//! Stage 1 adapter: cache key, the call into `desal-fit`, and the artifact conversion.
+//! Stage 1: its parameters and their validation, its cache key, the call into
+//! `desal-fit` and the artifact conversion.
 
 use anyhow::Result;
 use desal_fit::{FitConfig, FitModel, FitResult};
 use desal_io::artifact::{ArtifactKind, ContentHash, FitV1};
 use desal_mesh::{PartLabels, PoseSet, Progress};
+use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use crate::cache::StageKey;
-use crate::pipeline::{FitParams, canonical_json};
+use crate::cache::{StageKey, canonical_json};
+use crate::stages::runner::StageOutput;
 
-/// Version of stage 1 as the driver runs it.
-pub const VERSION: u32 = 1;
+/// Stage 1 parameters (`[fit]` in pipeline files, `desal fit` flags).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct FitParams {
+    /// `rigid` (Kabsch, proper rotations; the default) or `affine` (the paper's literal
+    /// unconstrained fit, for the ablation).
+    #[serde(with = "crate::cache::by_name")]
+    pub method: FitModel,
+}
 
-pub fn key(params: &FitParams, poses: ContentHash, labels: ContentHash) -> StageKey {
-    StageKey {
-        stage: "fit".into(),
-        stage_version: VERSION,
-        format_version: ArtifactKind::Fit.current_version(),
-        parameters: canonical_json(params),
-        inputs: vec![("poses".into(), poses), ("labels".into(), labels)],
+impl FitParams {
+    /// The library configuration these parameters resolve to.
+    pub fn config(&self) -> FitConfig {
+        FitConfig { model: self.method, ..FitConfig::default() }
+    }
+
+    /// The cache key of a fit of `poses` with `labels`.
+    pub fn key(&self, poses: ContentHash, labels: ContentHash) -> StageKey {
+        let FitConfig { model, degenerate_ratio } = self.config();
+        StageKey {
+            stage: "fit".into(),
+            stage_version: desal_fit::VERSION,
+            format_version: ArtifactKind::Fit.current_version(),
+            parameters: canonical_json(self),
+            resolved: canonical_json(&json!({ "model": model.name(), "degenerate_ratio": degenerate_ratio })),
+            inputs: vec![("poses".into(), poses), ("labels".into(), labels)],
+        }
     }
 }
 
-pub fn config(params: &FitParams) -> Result<FitConfig> {
-    let model = match params.method.as_str() {
-        "rigid" => FitModel::Rigid,
-        "affine" => FitModel::Affine,
-        other => anyhow::bail!("fit.method '{other}' is unknown: use \"rigid\" or \"affine\""),
-    };
-    Ok(FitConfig { model, ..FitConfig::default() })
+/// `fit.json`: the fit's figures, worst parts and poses first.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FitSummary {
+    pub model: String,
+    pub seconds: f64,
+    pub mean_residual: f64,
+    pub rms_residual: f64,
+    pub max_residual: f64,
+    pub worst_parts: Vec<WorstPart>,
+    pub worst_poses: Vec<WorstPose>,
 }
 
-/// Runs stage 1 and converts the result; returns the artifact body, the summary JSON
-/// and the one-line note.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct WorstPart {
+    pub part: u32,
+    pub name: String,
+    pub vertices: usize,
+    pub mean: f64,
+    pub rms: f64,
+    pub max: f64,
+    pub worst_pose: String,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct WorstPose {
+    pub pose: String,
+    pub mean: f64,
+    pub rms: f64,
+    pub max: f64,
+    pub worst_part: String,
+}
+
+/// Runs stage 1.
 pub fn compute(
     params: &FitParams,
     set: &PoseSet,
     labels: &PartLabels,
     progress: &dyn Progress,
-) -> Result<(FitV1, serde_json::Value, String)> {
+) -> Result<StageOutput<FitV1, FitSummary>> {
     let start = std::time::Instant::now();
-    let result = desal_fit::fit_pose_set(set, labels, &config(params)?, progress)?;
+    let result = desal_fit::fit_pose_set(set, labels, &params.config(), progress)?;
     let seconds = start.elapsed().as_secs_f64();
     let s = &result.summary;
     let worst = s
@@ -54,21 +95,38 @@ pub fn compute(
         result.part_count(),
         s.mean_residual * 1e3
     );
-    let summary = json!({
-        "model": result.model.name(),
-        "seconds": seconds,
-        "mean_residual": s.mean_residual,
-        "rms_residual": s.rms_residual,
-        "max_residual": s.max_residual,
-        "worst_parts": s.parts.iter().map(|p| json!({
-            "part": p.part, "name": p.name, "vertices": p.vertices, "mean": p.mean, "rms": p.rms, "max": p.max,
-            "worst_pose": p.worst_pose_name,
-        })).collect::<Vec<_>>(),
-        "worst_poses": s.poses.iter().map(|p| json!({
-            "pose": p.name, "mean": p.mean, "rms": p.rms, "max": p.max, "worst_part": p.worst_part_name,
-        })).collect::<Vec<_>>(),
-    });
-    Ok((to_artifact(&result), summary, note))
+    let summary = FitSummary {
+        model: result.model.name().into(),
+        seconds,
+        mean_residual: s.mean_residual,
+        rms_residual: s.rms_residual,
+        max_residual: s.max_residual,
+        worst_parts: s
+            .parts
+            .iter()
+            .map(|p| WorstPart {
+                part: p.part,
+                name: p.name.clone(),
+                vertices: p.vertices,
+                mean: p.mean,
+                rms: p.rms,
+                max: p.max,
+                worst_pose: p.worst_pose_name.clone(),
+            })
+            .collect(),
+        worst_poses: s
+            .poses
+            .iter()
+            .map(|p| WorstPose {
+                pose: p.name.clone(),
+                mean: p.mean,
+                rms: p.rms,
+                max: p.max,
+                worst_part: p.worst_part_name.clone(),
+            })
+            .collect(),
+    };
+    Ok(StageOutput { body: to_artifact(&result), summary, note })
 }
 
 fn to_artifact(r: &FitResult) -> FitV1 {

@@ -1,23 +1,25 @@
-//! Stage 4 adapter: cache key, the call into `desal-map`, the artifact conversion, and
-//! the registered simplified pose set written to the output folder.
+//! Stage 4: its cache key, the one path into `desal-map` (which map mode a stage-3
+//! result gets, the belongs-together checks) and the artifact conversion.
 
 use anyhow::{Result, bail};
 use desal_io::artifact::{ArtifactKind, ContentHash, MapV1, SimplifiedV1};
-use desal_map::{MapConfig, MapMode, VertexMap};
+use desal_map::{MapConfig, MapMode, MapOutput, VertexMap};
 use desal_mesh::{PartLabels, PoseSet};
+use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use crate::cache::StageKey;
+use crate::cache::{StageKey, canonical_json};
+use crate::stages::runner::StageOutput;
 
-/// Version of stage 4 as the driver runs it.
-pub const VERSION: u32 = 1;
-
+/// The cache key of a map of `simplified` onto `poses`.
 pub fn key(poses: ContentHash, simplified: ContentHash) -> StageKey {
+    let MapConfig { initial_candidates } = MapConfig::default();
     StageKey {
         stage: "map".into(),
-        stage_version: VERSION,
+        stage_version: desal_map::VERSION,
         format_version: ArtifactKind::Map.current_version(),
         parameters: "{}".into(),
+        resolved: canonical_json(&json!({ "initial_candidates": initial_candidates })),
         inputs: vec![("poses".into(), poses), ("simplified".into(), simplified)],
     }
 }
@@ -59,11 +61,11 @@ fn check_made_from(simplified: &SimplifiedV1, set: &PoseSet) -> Result<()> {
 /// Maps the simplified template to original vertices: exactly, when every simplified
 /// vertex is an original one (subset placement); by the paper's greedy rule otherwise.
 /// Refuses a result of another pose set, or a mesh that does not lie on the template.
-pub fn compute(
-    simplified: &SimplifiedV1,
-    set: &PoseSet,
-    labels: &PartLabels,
-) -> Result<(MapV1, serde_json::Value, String)> {
+/// Maps a stage-3 result (desal's or another tool's) onto `set` and applies the map to
+/// every pose: subset results by their own `simp_to_orig`, the rest by the paper's greedy
+/// rule. Refuses a result of another pose set, and a mesh that does not lie on this
+/// template.
+pub fn map(simplified: &SimplifiedV1, set: &PoseSet, labels: &PartLabels) -> Result<MapOutput> {
     check_made_from(simplified, set)?;
     let mesh = super::simplify::mesh(simplified);
     let kept: Option<Vec<u32>> = simplified.simp_to_orig.iter().copied().collect();
@@ -85,6 +87,33 @@ pub fn compute(
             100.0 * r.displacement.mean / diagonal
         );
     }
+    Ok(out)
+}
+
+/// `map.json`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct MapSummary {
+    pub mode: String,
+    pub original_vertices: usize,
+    pub simplified_vertices: usize,
+    pub simplified_faces: usize,
+    pub poses: usize,
+    pub displacement_mean: f64,
+    pub displacement_max: f64,
+    pub empty_parts: Vec<u32>,
+    pub map_seconds: f64,
+    pub apply_seconds: f64,
+}
+
+/// Runs stage 4 ([`map`]) as a pipeline stage; warns about parts no simplified vertex
+/// carries.
+pub fn compute(
+    simplified: &SimplifiedV1,
+    set: &PoseSet,
+    labels: &PartLabels,
+) -> Result<StageOutput<MapV1, MapSummary>> {
+    let out = map(simplified, set, labels)?;
+    let r = &out.report;
     if !r.empty_parts.is_empty() {
         let names: Vec<&str> = r.empty_parts.iter().map(|&p| labels.names[p as usize].as_str()).collect();
         eprintln!(
@@ -92,30 +121,28 @@ pub fn compute(
             names.join(", ")
         );
     }
-    let note = r.to_string();
-    let summary = json!({
-        "mode": r.mode,
-        "original_vertices": r.original_vertices,
-        "simplified_vertices": r.simplified_vertices,
-        "simplified_faces": r.simplified_faces,
-        "poses": r.poses,
-        "displacement_mean": r.displacement.mean,
-        "displacement_max": r.displacement.max,
-        "empty_parts": r.empty_parts,
-        "map_seconds": r.map_seconds,
-        "apply_seconds": r.apply_seconds,
-    });
+    let summary = MapSummary {
+        mode: r.mode.into(),
+        original_vertices: r.original_vertices,
+        simplified_vertices: r.simplified_vertices,
+        simplified_faces: r.simplified_faces,
+        poses: r.poses,
+        displacement_mean: r.displacement.mean,
+        displacement_max: r.displacement.max,
+        empty_parts: r.empty_parts.clone(),
+        map_seconds: r.map_seconds,
+        apply_seconds: r.apply_seconds,
+    };
     let body = MapV1 {
         simp_to_orig: out.map.simp_to_orig.clone(),
-        faces: mesh.faces.clone(),
+        faces: simplified.faces.clone(),
         mode: r.mode.into(),
         displacement_mean: r.displacement.mean,
         displacement_max: r.displacement.max,
     };
-    Ok((body, summary, note))
+    Ok(StageOutput { body, summary, note: r.to_string() })
 }
 
-/// Every pose simplified by `map` (a gather), with the labels carried along.
 pub fn apply(map: &MapV1, set: &PoseSet, labels: &PartLabels) -> Result<(PoseSet, PartLabels)> {
     let vertex_map = VertexMap::try_new(map.simp_to_orig.clone(), set.vertex_count())?;
     if map.faces.iter().flatten().any(|&i| i as usize >= vertex_map.len()) {
@@ -136,26 +163,4 @@ pub fn describe(m: &MapV1, out: &mut String) {
         m.displacement_mean,
         m.displacement_max
     );
-}
-
-/// The simplified template of stage 3, for `simplified-template-raw.ply`.
-pub fn raw_template(simplified: &SimplifiedV1) -> desal_mesh::TriMesh {
-    super::simplify::mesh(simplified)
-}
-
-/// Writes a simplified pose set into `dir`: `<pose>.ply` per pose, `parts.txt`,
-/// `vertex_map.txt`.
-pub fn write_pose_set(dir: &std::path::Path, map: &MapV1, set: &PoseSet, labels: &PartLabels) -> Result<()> {
-    use desal_io::ply::{PlyWriteOptions, write_ply};
-    for pose in 0..set.pose_count() {
-        write_ply(
-            &dir.join(format!("{}.ply", set.names[pose])),
-            &set.pose_mesh(pose),
-            &PlyWriteOptions::default(),
-        )?;
-    }
-    desal_io::labels::write_labels_txt(&dir.join("parts.txt"), labels)?;
-    let text: String = map.simp_to_orig.iter().map(|i| format!("{i}\n")).collect();
-    desal_io::write_atomic(&dir.join("vertex_map.txt"), text.as_bytes())?;
-    Ok(())
 }

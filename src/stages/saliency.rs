@@ -1,52 +1,115 @@
-//! Stage 2 adapter: cache key, the call into `desal-saliency`, and the artifact
-//! conversion.
+//! Stage 2: its parameters and their validation, its cache key, the call into
+//! `desal-saliency` and the artifact conversion.
 
 use anyhow::Result;
 use desal_io::artifact::{ArtifactKind, ContentHash, FitV1, SaliencyV1};
 use desal_saliency::{Distance, Normalisation, ResidualTable, SaliencyConfig};
+use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use crate::cache::StageKey;
-use crate::pipeline::{SaliencyParams, canonical_json};
+use crate::cache::{StageKey, canonical_json};
+use crate::stages::runner::StageOutput;
 
-/// Version of stage 2 as the driver runs it.
-pub const VERSION: u32 = 1;
+/// Stage 2 parameters (`[saliency]` in pipeline files, `desal saliency` flags).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SaliencyParams {
+    /// Sum squared residual distances instead of plain ones.
+    pub squared: bool,
+    /// Normalise by this percentile of the per-vertex sums, in (0, 100] (100 = the
+    /// maximum, the paper).
+    pub percentile: f64,
+    /// Pose names left out of the sum.
+    pub exclude: Vec<String>,
+    /// Weight floor: stage 3 uses `floor + (1 - floor) * saliency`. Default
+    /// [`desal_saliency::DEFAULT_WEIGHT_FLOOR`].
+    pub floor: Option<f64>,
+}
 
-pub fn key(params: &SaliencyParams, poses: ContentHash, fit: ContentHash) -> StageKey {
-    StageKey {
-        stage: "saliency".into(),
-        stage_version: VERSION,
-        format_version: ArtifactKind::Saliency.current_version(),
-        parameters: canonical_json(&json!({
-            "squared": params.squared,
-            "percentile": params.percentile,
-            "exclude": params.exclude,
-            "floor": params.floor.unwrap_or(desal_saliency::DEFAULT_WEIGHT_FLOOR),
-        })),
-        inputs: vec![("poses".into(), poses), ("fit".into(), fit)],
+impl Default for SaliencyParams {
+    fn default() -> Self {
+        SaliencyParams { squared: false, percentile: 100.0, exclude: Vec::new(), floor: None }
     }
 }
 
-pub fn config(params: &SaliencyParams) -> SaliencyConfig {
-    SaliencyConfig {
-        distance: if params.squared { Distance::Squared } else { Distance::Plain },
-        normalisation: if params.percentile >= 100.0 {
-            Normalisation::Max
-        } else {
-            Normalisation::Percentile(params.percentile)
-        },
-        exclude_poses: params.exclude.clone(),
-        weight_floor: params.floor.unwrap_or(desal_saliency::DEFAULT_WEIGHT_FLOOR),
-        ..SaliencyConfig::default()
+impl SaliencyParams {
+    /// The library configuration these parameters resolve to, validated.
+    pub fn config(&self) -> Result<SaliencyConfig> {
+        let config = SaliencyConfig {
+            distance: if self.squared { Distance::Squared } else { Distance::Plain },
+            normalisation: if self.percentile == 100.0 {
+                Normalisation::Max
+            } else {
+                Normalisation::Percentile(self.percentile)
+            },
+            exclude_poses: self.exclude.clone(),
+            weight_floor: self.floor.unwrap_or(desal_saliency::DEFAULT_WEIGHT_FLOOR),
+            ..SaliencyConfig::default()
+        };
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// The cache key of a saliency of `poses` from `fit`.
+    pub fn key(&self, poses: ContentHash, fit: ContentHash) -> Result<StageKey> {
+        let SaliencyConfig { distance, normalisation, exclude_poses, weight_floor, rigid_tolerance } =
+            self.config()?;
+        let normalisation = match normalisation {
+            Normalisation::Max => json!("max"),
+            Normalisation::Percentile(p) => json!({ "percentile": p }),
+        };
+        Ok(StageKey {
+            stage: "saliency".into(),
+            stage_version: desal_saliency::VERSION,
+            format_version: ArtifactKind::Saliency.current_version(),
+            parameters: canonical_json(&json!({
+                "squared": self.squared,
+                "percentile": self.percentile,
+                "exclude": self.exclude,
+                "floor": weight_floor,
+            })),
+            resolved: canonical_json(&json!({
+                "distance": distance_name(distance),
+                "normalisation": normalisation,
+                "exclude_poses": exclude_poses,
+                "weight_floor": weight_floor,
+                "rigid_tolerance": rigid_tolerance,
+            })),
+            inputs: vec![("poses".into(), poses), ("fit".into(), fit)],
+        })
     }
 }
 
-/// Runs stage 2 on a fit; `length_scale` is the template's bounding-box diagonal.
+fn distance_name(distance: Distance) -> &'static str {
+    match distance {
+        Distance::Plain => "plain",
+        Distance::Squared => "squared",
+    }
+}
+
+/// `saliency.json`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SaliencySummary {
+    pub seconds: f64,
+    pub distance: String,
+    pub normalisation: String,
+    pub normaliser: f64,
+    pub weight_floor: f64,
+    pub poses_used: usize,
+    pub poses_excluded: Vec<String>,
+    pub raw_min: f64,
+    pub raw_max: f64,
+    pub raw_mean: f64,
+    pub saturated_vertices: usize,
+    pub rigid: bool,
+}
+
+/// Runs stage 2 on a fit's residuals; `length_scale` is the template's diagonal.
 pub fn compute(
     params: &SaliencyParams,
     fit: &FitV1,
     length_scale: f64,
-) -> Result<(SaliencyV1, serde_json::Value, String)> {
+) -> Result<StageOutput<SaliencyV1, SaliencySummary>> {
     let start = std::time::Instant::now();
     let table = ResidualTable {
         values: &fit.residuals,
@@ -55,17 +118,14 @@ pub fn compute(
         template: Some(fit.template as usize),
         length_scale,
     };
-    let s = desal_saliency::compute_saliency(&table, &config(params))?;
+    let s = desal_saliency::compute_saliency(&table, &params.config()?)?;
     let seconds = start.elapsed().as_secs_f64();
     let r = &s.report;
     let normalisation = match r.normalisation {
         Normalisation::Max => "max".to_owned(),
         Normalisation::Percentile(p) => format!("p{p}"),
     };
-    let distance = match r.distance {
-        Distance::Plain => "plain",
-        Distance::Squared => "squared",
-    };
+    let distance = distance_name(r.distance);
     let note = format!(
         "{} poses summed ({distance}), raw sums {:.3}..{:.3}, normalised by {normalisation} = {:.3}, weight floor {}",
         r.poses_used.len(),
@@ -74,20 +134,20 @@ pub fn compute(
         s.normaliser,
         r.weight_floor
     );
-    let summary = json!({
-        "seconds": seconds,
-        "distance": distance,
-        "normalisation": normalisation,
-        "normaliser": s.normaliser,
-        "weight_floor": r.weight_floor,
-        "poses_used": r.poses_used.len(),
-        "poses_excluded": r.poses_excluded,
-        "raw_min": r.raw_min,
-        "raw_max": r.raw_max,
-        "raw_mean": r.raw_mean,
-        "saturated_vertices": r.saturated_vertices,
-        "rigid": r.rigid,
-    });
+    let summary = SaliencySummary {
+        seconds,
+        distance: distance.into(),
+        normalisation: normalisation.clone(),
+        normaliser: s.normaliser,
+        weight_floor: r.weight_floor,
+        poses_used: r.poses_used.len(),
+        poses_excluded: r.poses_excluded.clone(),
+        raw_min: r.raw_min,
+        raw_max: r.raw_max,
+        raw_mean: r.raw_mean,
+        saturated_vertices: r.saturated_vertices,
+        rigid: r.rigid,
+    };
     let body = SaliencyV1 {
         saliency: s.saliency,
         weights: s.weights,
@@ -100,10 +160,9 @@ pub fn compute(
         poses_excluded: r.poses_excluded.clone(),
         rigid: r.rigid,
     };
-    Ok((body, summary, note))
+    Ok(StageOutput { body, summary, note })
 }
 
-/// `desal inspect` lines for a saliency artifact.
 pub fn describe(s: &SaliencyV1, out: &mut String) {
     use std::fmt::Write as _;
     let n = s.saliency.len().max(1) as f64;

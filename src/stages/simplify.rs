@@ -1,169 +1,337 @@
-//! Stage 3 adapter: cache key, the call into `desal-simplify`, and the artifact
-//! conversion.
+//! Stage 3: its parameters and their validation, its cache key, and the one path into
+//! `desal-simplify` that `desal run`, `desal simplify` and every `desal eval` method
+//! share (which inputs get the weights and the labels, the artifact conversion).
 
 use anyhow::{Result, bail};
 use desal_io::artifact::{ArtifactKind, ContentHash, SimplifiedV1};
-use desal_mesh::{PartLabels, TriMesh, Vec3};
-use desal_simplify::{Metric, PartBorders, Placement, SimplifyConfig, SimplifyInput, StopReason, Target};
+use desal_mesh::{PartLabels, PoseSet, TriMesh, Vec3};
+use desal_simplify::{
+    Metric, PartBorders, Placement, Simplified, SimplifyConfig, SimplifyInput, SimplifyReport, StopReason,
+    Target,
+};
+use serde::{Deserialize, Serialize};
 use serde_json::json;
 
-use crate::cache::StageKey;
-use crate::pipeline::{SimplifyParams, canonical_json};
+use crate::cache::{StageKey, canonical_json};
+use crate::stages::runner::StageOutput;
 
-/// Version of stage 3 as the driver runs it.
-/// 2: the corner-normal fold guard (`max_corner_normal_deg`) changes results.
-pub const VERSION: u32 = 2;
+/// The keys of `[simplify]` that name its target; at most one may be given.
+pub const TARGET_KEYS: [&str; 3] = ["target_vertices", "target_faces", "ratio"];
 
-/// The target a parameter set asks for: vertices, else faces, else the ratio.
-pub fn target(params: &SimplifyParams) -> Target {
-    match (params.target_vertices, params.target_faces, params.ratio) {
-        (Some(v), _, _) => Target::Vertices(v),
-        (None, Some(f), _) => Target::Faces(f),
-        (None, None, Some(r)) => Target::Ratio(r),
-        (None, None, None) => Target::Ratio(0.2),
-    }
+/// Stage 3 parameters (`[simplify]` in pipeline files). Every default is the library's
+/// ([`SimplifyConfig::default`]), so pipeline files, `desal-simplify` and the library
+/// agree (README, "Defaults").
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimplifyParams {
+    /// Target vertex count (the paper: 2500). At most one of the three targets is
+    /// given; none means the library's default target (`ratio = 0.2`).
+    pub target_vertices: Option<usize>,
+    pub target_faces: Option<usize>,
+    /// Target as a fraction of the input face count.
+    pub ratio: Option<f64>,
+    /// `optimal` (the paper) or `subset` (keep original vertices).
+    #[serde(with = "crate::cache::by_name")]
+    pub placement: Placement,
+    /// Weight the cost by deformation saliency.
+    pub saliency: bool,
+    /// Multiply the cost by the edge length (the paper's balance term).
+    pub balance: bool,
+    /// Keep part borders (lock vertices on the border between two parts).
+    pub keep_part_borders: bool,
+    /// `quadric` (Garland–Heckbert, the paper's) or `lindstrom-turk` (memoryless,
+    /// CGAL's default; lower surface error on one mesh, see BENCHMARKS.md).
+    #[serde(with = "crate::cache::by_name")]
+    pub metric: Metric,
+    /// Weight of the boundary constraint quadrics ([`SimplifyConfig::boundary_weight`]);
+    /// the library's default when absent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub boundary_weight: Option<f64>,
 }
 
-pub fn config(params: &SimplifyParams) -> Result<SimplifyConfig> {
-    let given = [params.target_vertices.is_some(), params.target_faces.is_some(), params.ratio.is_some()];
-    if given.iter().filter(|&&g| g).count() > 1 {
-        bail!("simplify: give one of target_vertices, target_faces and ratio, not several");
-    }
-    match target(params) {
-        Target::Vertices(n) | Target::Faces(n) if n < 4 => {
-            bail!(
-                "simplify: a target of {n} is too small: the simplest closed surface has 4 vertices and 4 faces"
-            )
+impl Default for SimplifyParams {
+    fn default() -> Self {
+        let library = SimplifyConfig::default();
+        SimplifyParams {
+            target_vertices: None,
+            target_faces: None,
+            ratio: None,
+            placement: library.placement,
+            saliency: library.saliency,
+            balance: library.balance,
+            keep_part_borders: library.part_borders == PartBorders::Lock,
+            metric: library.metric,
+            boundary_weight: None,
         }
-        _ => {}
     }
-    let placement = match params.placement.as_str() {
-        "optimal" => Placement::Optimal,
-        "subset" => Placement::Subset,
-        other => bail!("simplify.placement '{other}' is unknown: use \"optimal\" or \"subset\""),
-    };
-    let metric = match params.metric.as_str() {
-        "quadric" => Metric::Quadric,
-        "lindstrom-turk" => Metric::LindstromTurk,
-        other => bail!("simplify.metric '{other}' is unknown: use \"quadric\" or \"lindstrom-turk\""),
-    };
-    let config = SimplifyConfig {
-        target: target(params),
-        placement,
-        saliency: params.saliency,
-        balance: params.balance,
-        part_borders: if params.keep_part_borders { PartBorders::Lock } else { PartBorders::Ignore },
-        metric,
-        ..SimplifyConfig::default()
-    };
-    config.validate()?;
-    Ok(config)
 }
 
-/// The key covers only what the result depends on: the resolved target, and the
-/// saliency (labels) input only when the cost (border lock) uses it.
-pub fn key(
-    params: &SimplifyParams,
-    poses: ContentHash,
-    saliency: ContentHash,
-    labels: ContentHash,
-) -> StageKey {
-    let target = match target(params) {
+impl SimplifyParams {
+    /// The target asked for: vertices, else faces, else the ratio, else the library's.
+    pub fn target(&self) -> Target {
+        match (self.target_vertices, self.target_faces, self.ratio) {
+            (Some(v), _, _) => Target::Vertices(v),
+            (None, Some(f), _) => Target::Faces(f),
+            (None, None, Some(r)) => Target::Ratio(r),
+            (None, None, None) => SimplifyConfig::default().target,
+        }
+    }
+
+    /// The library configuration these parameters resolve to, validated.
+    pub fn config(&self) -> Result<SimplifyConfig> {
+        let given = [self.target_vertices.is_some(), self.target_faces.is_some(), self.ratio.is_some()];
+        if given.iter().filter(|&&g| g).count() > 1 {
+            bail!("simplify: give one of target_vertices, target_faces and ratio, not several");
+        }
+        match self.target() {
+            Target::Vertices(n) | Target::Faces(n) if n < 4 => {
+                bail!(
+                    "simplify: a target of {n} is too small: the simplest closed surface has 4 vertices and 4 faces"
+                )
+            }
+            _ => {}
+        }
+        let library = SimplifyConfig::default();
+        let config = SimplifyConfig {
+            target: self.target(),
+            placement: self.placement,
+            saliency: self.saliency,
+            balance: self.balance,
+            part_borders: if self.keep_part_borders { PartBorders::Lock } else { PartBorders::Ignore },
+            metric: self.metric,
+            boundary_weight: self.boundary_weight.unwrap_or(library.boundary_weight),
+            ..library
+        };
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// The cache key of a simplification of `poses`' template. The resolved part holds
+    /// every field of the library configuration; the inputs only what the cost uses
+    /// (the saliency when weighted, the labels when part borders are kept).
+    pub fn key(&self, poses: ContentHash, saliency: ContentHash, labels: ContentHash) -> Result<StageKey> {
+        let config = self.config()?;
+        let mut inputs = vec![("poses".to_owned(), poses)];
+        if config.saliency {
+            inputs.push(("saliency".into(), saliency));
+        }
+        if config.part_borders != PartBorders::Ignore {
+            inputs.push(("labels".into(), labels));
+        }
+        let mut parameters = json!({
+            "target": target_json(config.target),
+            "placement": self.placement.name(),
+            "saliency": self.saliency,
+            "balance": self.balance,
+            "keep_part_borders": self.keep_part_borders,
+            "metric": self.metric.name(),
+        });
+        if let Some(w) = self.boundary_weight {
+            parameters["boundary_weight"] = json!(w);
+        }
+        Ok(StageKey {
+            stage: "simplify".into(),
+            stage_version: desal_simplify::VERSION,
+            format_version: ArtifactKind::Simplified.current_version(),
+            parameters: canonical_json(&parameters),
+            resolved: resolved_json(&config),
+            inputs,
+        })
+    }
+}
+
+fn target_json(target: Target) -> serde_json::Value {
+    match target {
         Target::Vertices(v) => json!({ "vertices": v }),
         Target::Faces(f) => json!({ "faces": f }),
         Target::Ratio(r) => json!({ "ratio": r }),
-    };
-    let mut inputs = vec![("poses".to_owned(), poses)];
-    if params.saliency {
-        inputs.push(("saliency".into(), saliency));
-    }
-    if params.keep_part_borders {
-        inputs.push(("labels".into(), labels));
-    }
-    StageKey {
-        stage: "simplify".into(),
-        stage_version: VERSION,
-        format_version: ArtifactKind::Simplified.current_version(),
-        parameters: canonical_json(&json!({
-            "target": target,
-            "placement": params.placement,
-            "saliency": params.saliency,
-            "balance": params.balance,
-            "keep_part_borders": params.keep_part_borders,
-            "metric": params.metric,
-        })),
-        inputs,
     }
 }
 
-/// Runs stage 3 on the template with the saliency weights.
+/// Every field of the configuration, destructured exhaustively: a field added to
+/// [`SimplifyConfig`] and left out here does not compile, so it cannot miss the key.
+fn resolved_json(config: &SimplifyConfig) -> String {
+    let SimplifyConfig {
+        target,
+        placement,
+        saliency,
+        balance,
+        boundary_weight,
+        part_borders,
+        max_normal_rotation_deg,
+        max_corner_normal_deg,
+        max_placement_distance,
+        metric,
+    } = config;
+    let part_borders = match part_borders {
+        PartBorders::Ignore => json!("ignore"),
+        PartBorders::Lock => json!("lock"),
+        PartBorders::Constrain(w) => json!({ "constrain": w }),
+    };
+    canonical_json(&json!({
+        "target": target_json(*target),
+        "placement": placement.name(),
+        "saliency": saliency,
+        "balance": balance,
+        "boundary_weight": boundary_weight,
+        "part_borders": part_borders,
+        "max_normal_rotation_deg": max_normal_rotation_deg,
+        "max_corner_normal_deg": max_corner_normal_deg,
+        "max_placement_distance": max_placement_distance,
+        "metric": metric.name(),
+    }))
+}
+
+/// Which factors of the paper's cost (Eq. 5) are on: the names of tables and reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Cost {
+    /// Plain quadric error (Garland & Heckbert 1997).
+    Qslim,
+    /// Quadric error × mean saliency weight of the edge.
+    Saliency,
+    /// Quadric error × edge length.
+    Balance,
+    /// Quadric error × mean saliency weight × edge length (the paper).
+    Paper,
+}
+
+impl Cost {
+    pub const ALL: [Cost; 4] = [Cost::Qslim, Cost::Saliency, Cost::Balance, Cost::Paper];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Cost::Qslim => "qslim",
+            Cost::Saliency => "saliency",
+            Cost::Balance => "balance",
+            Cost::Paper => "paper",
+        }
+    }
+
+    /// `(saliency, balance)` switches of [`SimplifyConfig`].
+    pub fn switches(self) -> (bool, bool) {
+        match self {
+            Cost::Qslim => (false, false),
+            Cost::Saliency => (true, false),
+            Cost::Balance => (false, true),
+            Cost::Paper => (true, true),
+        }
+    }
+
+    /// The cost a configuration's switches select.
+    pub fn of(config: &SimplifyConfig) -> Cost {
+        let switches = (config.saliency, config.balance);
+        Cost::ALL.into_iter().find(|c| c.switches() == switches).expect("every switch pair has a name")
+    }
+}
+
+impl std::str::FromStr for Cost {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        Cost::ALL.into_iter().find(|c| c.name() == s).ok_or_else(|| format!("cost '{s}' is unknown"))
+    }
+}
+
+/// `simplified.json`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SimplifySummary {
+    pub method: String,
+    #[serde(with = "crate::cache::by_name")]
+    pub placement: Placement,
+    #[serde(with = "crate::cache::by_name")]
+    pub metric: Metric,
+    pub input_vertices: usize,
+    pub input_faces: usize,
+    pub output_vertices: usize,
+    pub output_faces: usize,
+    pub collapses: usize,
+    #[serde(with = "crate::cache::by_name")]
+    pub stop: StopReason,
+    pub refused_topology: usize,
+    pub refused_flip: usize,
+    pub refused_degenerate: usize,
+    pub locked_vertices: usize,
+    pub max_error: f64,
+    pub mean_error: f64,
+    pub edge_length_mean: f64,
+    pub edge_length_variance: f64,
+    pub seconds: f64,
+}
+
+/// Runs stage 3 on the template: `weights` (stage 2's, per original vertex) are used when
+/// `config.saliency` is on, `labels` when part borders are kept.
 pub fn compute(
-    params: &SimplifyParams,
+    config: &SimplifyConfig,
     template: &TriMesh,
     weights: &[f64],
     labels: &PartLabels,
     progress: &dyn desal_mesh::Progress,
-) -> Result<(SimplifiedV1, serde_json::Value, String)> {
-    let config = config(params)?;
+) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
     let mut input = SimplifyInput::new(template);
-    if params.saliency {
+    if config.saliency {
         input = input.with_weights(weights);
     }
-    if params.keep_part_borders {
+    if config.part_borders != PartBorders::Ignore {
         input = input.with_part_labels(&labels.labels);
     }
-    let result = desal_simplify::simplify_with_progress(&input, &config, progress)?;
-    let r = &result.report;
-    let note = r.to_string();
-    let stop = match r.stop {
-        StopReason::TargetReached => "target",
-        StopReason::NoValidCollapse => "no-valid-collapse",
+    let result = desal_simplify::simplify_with_progress(&input, config, progress)?;
+    Ok(output(config, Cost::of(config).name(), &result))
+}
+
+/// Multi-pose QEM (Mohr & Gleicher 2003) over `poses`, subset placement, as a stage-3
+/// output (`desal eval`'s `multipose`).
+pub fn compute_multipose(
+    config: &SimplifyConfig,
+    poses: &PoseSet,
+    labels: &PartLabels,
+) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
+    let labels = (config.part_borders != PartBorders::Ignore).then_some(labels.labels.as_slice());
+    let result = desal_simplify::simplify_multipose(poses, None, labels, config)?;
+    let config = SimplifyConfig { placement: Placement::Subset, ..config.clone() };
+    Ok(output(&config, "multipose", &result))
+}
+
+fn output(
+    config: &SimplifyConfig,
+    method: &str,
+    result: &Simplified,
+) -> StageOutput<SimplifiedV1, SimplifySummary> {
+    let r: &SimplifyReport = &result.report;
+    let summary = SimplifySummary {
+        method: method.into(),
+        placement: config.placement,
+        metric: config.metric,
+        input_vertices: r.input_vertices,
+        input_faces: r.input_faces,
+        output_vertices: r.output_vertices,
+        output_faces: r.output_faces,
+        collapses: r.collapses,
+        stop: r.stop,
+        refused_topology: r.refusals.topology,
+        refused_flip: r.refusals.flip,
+        refused_degenerate: r.refusals.degenerate,
+        locked_vertices: r.locked_vertices,
+        max_error: r.max_error,
+        mean_error: r.mean_error,
+        edge_length_mean: r.edge_length_mean,
+        edge_length_variance: r.edge_length_variance,
+        seconds: r.seconds,
     };
-    let summary = json!({
-        "method": method_name(params),
-        "placement": params.placement,
-        "metric": params.metric,
-        "input_vertices": r.input_vertices,
-        "input_faces": r.input_faces,
-        "output_vertices": r.output_vertices,
-        "output_faces": r.output_faces,
-        "collapses": r.collapses,
-        "stop": stop,
-        "refused_topology": r.refusals.topology,
-        "refused_flip": r.refusals.flip,
-        "refused_degenerate": r.refusals.degenerate,
-        "locked_vertices": r.locked_vertices,
-        "max_error": r.max_error,
-        "mean_error": r.mean_error,
-        "edge_length_mean": r.edge_length_mean,
-        "edge_length_variance": r.edge_length_variance,
-        "seconds": r.seconds,
-    });
     let body = SimplifiedV1 {
         positions: result.mesh.positions.iter().map(|p| [p.x, p.y, p.z]).collect(),
         faces: result.mesh.faces.clone(),
         simp_to_orig: result.simp_to_orig.clone(),
-        placement: params.placement.clone(),
+        placement: config.placement.name().into(),
         input_vertices: r.input_vertices as u32,
         input_faces: r.input_faces as u32,
         collapses: r.collapses as u32,
-        stop: stop.into(),
+        stop: r.stop.name().into(),
         max_error: r.max_error,
         mean_error: r.mean_error,
         edge_length_mean: r.edge_length_mean,
         edge_length_variance: r.edge_length_variance,
     };
-    Ok((body, summary, note))
-}
-
-/// `qslim`, `saliency`, `balance` or `paper`, from the two cost switches.
-pub fn method_name(params: &SimplifyParams) -> &'static str {
-    match (params.saliency, params.balance) {
-        (false, false) => "qslim",
-        (true, false) => "saliency",
-        (false, true) => "balance",
-        (true, true) => "paper",
-    }
+    StageOutput { body, summary, note: r.to_string() }
 }
 
 /// A simplified template made by another tool, as a stage-3 body: no vertex is known to
@@ -223,19 +391,48 @@ mod tests {
 
     #[test]
     fn parameters_are_checked_and_the_metric_enters_the_cache_key() {
-        let quadric = SimplifyParams::default();
-        assert_eq!(config(&quadric).unwrap().metric, Metric::Quadric);
-        let lt = SimplifyParams { metric: "lindstrom-turk".into(), ..SimplifyParams::default() };
-        assert_eq!(config(&lt).unwrap().metric, Metric::LindstromTurk);
         let hash = ContentHash::of(b"poses");
-        assert_ne!(key(&quadric, hash, hash, hash).hash(), key(&lt, hash, hash, hash).hash());
+        let quadric = SimplifyParams::default();
+        assert_eq!(quadric.config().unwrap().metric, Metric::Quadric);
+        let lt = SimplifyParams { metric: Metric::LindstromTurk, ..SimplifyParams::default() };
+        assert_eq!(lt.config().unwrap().metric, Metric::LindstromTurk);
+        assert_ne!(quadric.key(hash, hash, hash).unwrap().hash(), lt.key(hash, hash, hash).unwrap().hash());
         let two =
             SimplifyParams { target_vertices: Some(100), ratio: Some(0.5), ..SimplifyParams::default() };
-        assert!(config(&two).unwrap_err().to_string().contains("not several"));
+        assert!(two.config().unwrap_err().to_string().contains("not several"));
         let zero = SimplifyParams { target_vertices: Some(0), ..SimplifyParams::default() };
-        assert!(config(&zero).unwrap_err().to_string().contains("too small"));
-        let typo = SimplifyParams { metric: "lindstrom".into(), ..SimplifyParams::default() };
-        let err = config(&typo).unwrap_err().to_string();
-        assert!(err.contains("simplify.metric 'lindstrom'"), "{err}");
+        assert!(zero.config().unwrap_err().to_string().contains("too small"));
+    }
+
+    /// The demonstration knob: `boundary_weight` changes the key (through the resolved
+    /// config) and the producer's parameters only when set.
+    #[test]
+    fn boundary_weight_enters_the_key_and_the_producer_only_when_set() {
+        let hash = ContentHash::of(b"poses");
+        let default = SimplifyParams::default().key(hash, hash, hash).unwrap();
+        let same = SimplifyParams { boundary_weight: Some(10.0), ..SimplifyParams::default() };
+        let same = same.key(hash, hash, hash).unwrap();
+        assert_eq!(default.resolved, same.resolved, "10 is the library default");
+        assert!(!default.parameters.contains("boundary_weight"));
+        let other = SimplifyParams { boundary_weight: Some(2.0), ..SimplifyParams::default() };
+        let other = other.key(hash, hash, hash).unwrap();
+        assert_ne!(default.hash(), other.hash());
+        assert!(other.parameters.contains("\"boundary_weight\":2.0"), "{}", other.parameters);
+    }
+
+    /// The pipeline's defaults are the library's, field by field.
+    #[test]
+    fn pipeline_defaults_are_the_library_defaults() {
+        let config = SimplifyParams::default().config().unwrap();
+        assert_eq!(config, SimplifyConfig::default());
+    }
+
+    #[test]
+    fn every_cost_name_reads_back() {
+        for cost in Cost::ALL {
+            assert_eq!(cost.name().parse::<Cost>(), Ok(cost));
+            let (saliency, balance) = cost.switches();
+            assert_eq!(Cost::of(&SimplifyConfig { saliency, balance, ..SimplifyConfig::default() }), cost);
+        }
     }
 }

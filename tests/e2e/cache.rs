@@ -51,6 +51,30 @@ fn changed_saliency_parameter_reruns_saliency_and_later_only() {
     assert!(reason.contains("squared false -> true"), "{reason}");
 }
 
+/// The knob added as the two-file demonstration (issue 11): `boundary_weight` in a
+/// pipeline file re-runs simplify and map only, and `--explain` names it.
+#[test]
+fn changed_boundary_weight_reruns_simplify_and_map_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = write_tube_dataset(dir.path(), "");
+    run_ok(&pipeline, &[]);
+    let text = std::fs::read_to_string(&pipeline).unwrap();
+    let with_weight = if text.contains("[dataset.simplify]") {
+        text.replace("[dataset.simplify]\n", "[dataset.simplify]\nboundary_weight = 2.5\n")
+    } else {
+        format!("{text}[dataset.simplify]\nboundary_weight = 2.5\n")
+    };
+    std::fs::write(&pipeline, with_weight).unwrap();
+    let report = run_ok(&pipeline, &[]);
+    assert_eq!(ran(&report), ["simplify", "map"], "{report}");
+    let reason =
+        report["stages"].as_array().unwrap().iter().find(|s| s["name"] == "simplify").unwrap()["miss_reason"]
+            .as_str()
+            .unwrap()
+            .to_owned();
+    assert!(reason.contains("boundary_weight (unset) -> 2.5"), "{reason}");
+}
+
 #[test]
 fn changed_labels_file_reruns_from_fit_not_ingest() {
     let dir = tempfile::tempdir().unwrap();
@@ -125,7 +149,9 @@ fn run_killed_while_storing_leaves_no_entry_and_the_next_run_succeeds() {
     let entries: Vec<String> = std::fs::read_dir(&fit_dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| !n.starts_with(".tmp-"))
+        // A hidden `.KEY.tmp-PID-N` folder is the killed store's work in progress, which
+        // no lookup reads (and the next store in this folder removes).
+        .filter(|n| !n.starts_with('.'))
         .collect();
     assert!(entries.is_empty(), "a killed store left an entry: {entries:?}");
     assert!(!dir.path().join("out/tube").exists(), "no partial output folder");

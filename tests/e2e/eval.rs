@@ -289,6 +289,10 @@ fn bad_requests_fail_with_a_clear_message_and_leave_no_eval_folder() {
 /// claim holds: the saliency cost lets the faces on head, hands and feet grow relative
 /// to the joints' faces.
 #[test]
+#[cfg_attr(
+    not(desal_shared_data),
+    ignore = "needs ../shared/datasets beside the checkout (development and CI only)"
+)]
 fn scape_eval_reports_every_pose_and_moves_vertices_to_the_joints() {
     let Some(scape) = crate::support::shared_dataset("scape") else { return };
     let dir = tempfile::tempdir().unwrap();

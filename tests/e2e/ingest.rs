@@ -152,6 +152,10 @@ fn truncated_and_foreign_files_are_refused() {
 }
 
 #[test]
+#[cfg_attr(
+    not(desal_shared_data),
+    ignore = "needs ../shared/datasets beside the checkout (development and CI only)"
+)]
 fn scape_pipeline_ingests_all_71_poses() {
     if shared_dataset("scape").is_none() {
         return;
@@ -193,7 +197,7 @@ fn bad_stage_parameters_are_refused_before_anything_runs() {
         ("[dataset.saliency]\npercentile = 0\n", "percentile"),
         ("[dataset.saliency]\nexclude = [\"nosuch\"]\n", "pose 'nosuch'"),
         ("up_axis = \"w\"\n", "up_axis 'w'"),
-        ("[dataset.fit]\nmethod = \"spline\"\n", "fit.method 'spline'"),
+        ("[dataset.fit]\nmethod = \"spline\"\n", "fit method 'spline' is unknown"),
         ("[dataset.simplify]\ntarget_vertices = 2\n", "too small"),
     ] {
         let dir = tempfile::tempdir().unwrap();

@@ -6,3 +6,4 @@ mod eval;
 mod ingest;
 mod stages;
 mod support;
+mod tidy;

@@ -34,12 +34,33 @@ pub enum FitModel {
 }
 
 impl FitModel {
-    /// A stable lower-case name for reports and artifacts.
+    /// Every model, in the order error messages list them.
+    pub const ALL: [FitModel; 2] = [FitModel::Rigid, FitModel::Affine];
+
+    /// A stable lower-case name for reports, artifacts, pipeline files and the CLI: the
+    /// one spelling table of this enum ([`std::str::FromStr`] reads it back).
     pub fn name(self) -> &'static str {
         match self {
             FitModel::Rigid => "rigid",
             FitModel::Affine => "affine",
         }
+    }
+}
+
+impl std::fmt::Display for FitModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for FitModel {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        FitModel::ALL
+            .into_iter()
+            .find(|m| m.name() == s)
+            .ok_or_else(|| format!("fit method '{s}' is unknown: use \"rigid\" or \"affine\""))
     }
 }
 

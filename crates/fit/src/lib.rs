@@ -23,3 +23,8 @@ pub use align::{
 pub use error::FitError;
 pub use fit::{FitConfig, FitModel, FitResult, PartFit, fit_pose_set};
 pub use summary::{FitSummary, PartSummary, PoseSummary};
+
+/// Version of this stage's output. The driver's cache key carries it, so bump it in the
+/// same commit as any change that alters the output for the same input and config; the
+/// golden test `tests/golden.rs` fails until you do.
+pub const VERSION: u32 = 1;

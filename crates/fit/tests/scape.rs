@@ -13,6 +13,10 @@ fn load_scape() -> Option<(PoseSet, PartLabels)> {
 }
 
 #[test]
+#[cfg_attr(
+    not(desal_shared_data),
+    ignore = "needs ../shared/datasets beside the checkout (development and CI only)"
+)]
 fn scape_mean_residual_is_about_14_5_mm() {
     let Some((poses, labels)) = load_scape() else { return };
     assert_eq!((poses.pose_count(), poses.vertex_count()), (71, 12500));

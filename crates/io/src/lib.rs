@@ -9,6 +9,7 @@
 pub mod artifact;
 pub mod atomic;
 pub mod codec;
+pub mod dir;
 pub mod error;
 pub mod labels;
 pub mod obj;
@@ -19,6 +20,7 @@ use std::path::Path;
 
 pub use artifact::{ArtifactKind, ContentHash, Producer};
 pub use atomic::{write_atomic, write_json};
+pub use dir::{create_dir_once, replace_dir};
 pub use error::IoError;
 
 use desal_mesh::TriMesh;

@@ -256,6 +256,10 @@ fn labels_artifact_round_trips() {
 }
 
 #[test]
+#[cfg_attr(
+    not(desal_shared_data),
+    ignore = "needs ../shared/datasets beside the checkout (development and CI only)"
+)]
 fn reads_all_71_scape_poses() {
     let Some(dir) = scape_dir() else { return };
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)

@@ -37,6 +37,11 @@ pub use error::MapError;
 pub use greedy::{greedy_map, greedy_map_brute_force, greedy_map_with, squared_distance};
 pub use vertex_map::VertexMap;
 
+/// Version of this stage's output. The driver's cache key carries it, so bump it in the
+/// same commit as any change that alters the output for the same input and config; the
+/// golden test `tests/golden.rs` fails until you do.
+pub const VERSION: u32 = 1;
+
 /// Options of stage 4. The map never depends on them, only the time it takes.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct MapConfig {

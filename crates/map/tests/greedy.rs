@@ -209,6 +209,10 @@ fn errors_on_bad_input() {
 
 /// The mapping on the real SCAPE template: every 5th vertex, perturbed, onto all 12500.
 #[test]
+#[cfg_attr(
+    not(desal_shared_data),
+    ignore = "needs ../shared/datasets beside the checkout (development and CI only)"
+)]
 fn scape_template_decimation_fast_equals_brute_force() {
     let Some(dir) = desal_testdata::scape_dir() else { return };
     let path = dir.join("mesh000.ply");

@@ -65,6 +65,13 @@ impl TriMesh {
         self.bounding_box().map_or(0.0, |(lo, hi)| (hi - lo).norm())
     }
 
+    /// Mean and population variance of the unique edge lengths (the paper's Fig. 3), in
+    /// mesh units and squared mesh units; `(0, 0)` without edges. The one definition:
+    /// stage 3's report and `desal eval` both use it.
+    pub fn edge_length_stats(&self) -> (Real, Real) {
+        edge_length_stats(&self.positions, &self.faces)
+    }
+
     /// Area-weighted vertex normals (unit length; zero for isolated vertices).
     pub fn vertex_normals(&self) -> Vec<Vec3> {
         let mut normals = vec![Vec3::zeros(); self.positions.len()];
@@ -83,4 +90,18 @@ impl TriMesh {
         }
         normals
     }
+}
+
+/// Mean and population variance of the lengths of the unique edges of `faces` over
+/// `positions` (see [`TriMesh::edge_length_stats`]).
+pub fn edge_length_stats(positions: &[Vec3], faces: &[Face]) -> (Real, Real) {
+    let topology = crate::EdgeTopology::new(faces);
+    let n = topology.edges.len();
+    if n == 0 {
+        return (0.0, 0.0);
+    }
+    let lengths = topology.edges.iter().map(|&[a, b]| (positions[a as usize] - positions[b as usize]).norm());
+    let (sum, sum_sq) = lengths.fold((0.0, 0.0), |(s, s2), l| (s + l, s2 + l * l));
+    let mean = sum / n as Real;
+    (mean, (sum_sq / n as Real - mean * mean).max(0.0))
 }

@@ -18,5 +18,10 @@ pub mod saliency;
 pub use error::SaliencyError;
 pub use saliency::{
     DEFAULT_WEIGHT_FLOOR, Distance, Normalisation, ResidualTable, Saliency, SaliencyConfig, SaliencyReport,
-    compute_saliency,
+    compute_saliency, weight,
 };
+
+/// Version of this stage's output. The driver's cache key carries it, so bump it in the
+/// same commit as any change that alters the output for the same input and config; the
+/// golden test `tests/golden.rs` fails until you do.
+pub const VERSION: u32 = 1;

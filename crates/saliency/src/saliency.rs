@@ -25,6 +25,12 @@ use crate::error::SaliencyError;
 /// costs +12 % to +20 % v2f there), keeping most of SCAPE's gain from low floors.
 pub const DEFAULT_WEIGHT_FLOOR: Real = 0.05;
 
+/// The stage-3 weight of a vertex of saliency `saliency` under `floor`:
+/// `floor + (1 − floor) · saliency` (the one place this formula is written).
+pub fn weight(saliency: Real, floor: Real) -> Real {
+    floor + (1.0 - floor) * saliency
+}
+
 /// A borrowed view of stage 1's residual table, so that this crate needs no dependency
 /// on `desal-fit`.
 #[derive(Debug, Clone, Copy)]
@@ -156,7 +162,7 @@ pub fn compute_saliency(table: &ResidualTable, config: &SaliencyConfig) -> Resul
     let saliency: Vec<Real> =
         if rigid { vec![0.0; raw.len()] } else { raw.iter().map(|&r| (r / normaliser).min(1.0)).collect() };
     let floor = config.weight_floor;
-    let weights = saliency.iter().map(|&s| floor + (1.0 - floor) * s).collect();
+    let weights = saliency.iter().map(|&s| weight(s, floor)).collect();
 
     let report = SaliencyReport {
         distance: config.distance,

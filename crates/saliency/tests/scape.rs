@@ -54,6 +54,10 @@ fn mean_over(values: &[Real], keep: impl Fn(usize) -> bool) -> Real {
 }
 
 #[test]
+#[cfg_attr(
+    not(desal_shared_data),
+    ignore = "needs ../shared/datasets beside the checkout (development and CI only)"
+)]
 fn scape_saliency_is_high_at_joints_and_low_on_head_and_hands() {
     let Some((poses, labels)) = load_scape() else { return };
     let diagonal = poses.template_mesh().diagonal();

@@ -16,6 +16,7 @@ mod collapse;
 mod config;
 mod error;
 mod lindstrom_turk;
+mod names;
 pub mod quadric;
 mod report;
 
@@ -23,3 +24,10 @@ pub use collapse::{Simplified, SimplifyInput, simplify, simplify_multipose, simp
 pub use config::{Metric, PartBorders, Placement, SimplifyConfig, Target};
 pub use error::SimplifyError;
 pub use report::{Refusals, SimplifyReport, StopReason};
+
+/// Version of this stage's output. The driver's cache key carries it, so bump it in the
+/// same commit as any change that alters the output for the same input and
+/// [`SimplifyConfig`] (a cost, a safeguard, a tie-break, a placement rule); the golden
+/// test `tests/golden.rs` fails until you do.
+/// 2: the corner-normal fold guard (`max_corner_normal_deg`).
+pub const VERSION: u32 = 2;

@@ -84,15 +84,4 @@ impl fmt::Display for SimplifyReport {
     }
 }
 
-/// Mean and population variance of the lengths of the unique edges of `faces`.
-pub(crate) fn edge_length_stats(positions: &[desal_mesh::Vec3], faces: &[[u32; 3]]) -> (f64, f64) {
-    let topology = desal_mesh::EdgeTopology::new(faces);
-    let n = topology.edges.len();
-    if n == 0 {
-        return (0.0, 0.0);
-    }
-    let lengths = topology.edges.iter().map(|&[a, b]| (positions[a as usize] - positions[b as usize]).norm());
-    let (sum, sum_sq) = lengths.fold((0.0, 0.0), |(s, s2), l| (s + l, s2 + l * l));
-    let mean = sum / n as f64;
-    (mean, (sum_sq / n as f64 - mean * mean).max(0.0))
-}
+pub(crate) use desal_mesh::edge_length_stats;

@@ -1,12 +1,15 @@
 //! Test-only access to the datasets in `../shared/datasets` beside the checkout, with
 //! one skip policy for every test and bench that reads them.
 //!
-//! A user's clone has no `../shared`: tests that need it print `skipped: <reason>` and
-//! pass. CI always has it, and `.ci/run` sets `DESAL_REQUIRE_SHARED_DATA=1`, under which
-//! a missing dataset is a failure instead — so the SCAPE tests can never silently skip in
-//! CI.
+//! A user's clone has no `../shared`: tests that need it are marked
+//! `#[cfg_attr(not(desal_shared_data), ignore = ...)]` (see `desal-shared-data`), so the
+//! harness reports them as ignored with the reason. CI always has it, and `.ci/run` sets
+//! `DESAL_REQUIRE_SHARED_DATA=1`, under which a missing dataset is a failure instead.
+//! The loaders below still return `None` when the data is absent (benches use that).
 //!
 //! Used only as a dev-dependency.
+
+pub mod golden;
 
 use std::path::{Path, PathBuf};
 

@@ -1,20 +1,126 @@
-//! Ingest: pose files and a labels file in, a validated `PoseSet` and `PartLabels` out.
+//! Ingest and labels, the stages before stage 1: pose files and a labels file in, a validated `PoseSet` and `PartLabels` out.
 //! Every check that can fail on user input happens here, before anything is written.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use desal_io::ContentHash;
+use desal_io::artifact::{ArtifactKind, LabelsV1, PoseSetV1};
 use desal_mesh::validate::{check_same_faces, clean_faces};
 use desal_mesh::{Face, FaceCleanup};
 use desal_mesh::{PartLabels, PoseSet, Progress, TriMesh};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+use serde_json::json;
 
-use crate::pipeline::TemplateSpec;
+use crate::cache::{StageKey, canonical_json};
+use crate::stages::runner::StageOutput;
+
+/// Version of ingest (reading and validating the pose files) as the driver runs it;
+/// bump when its output for the same files and parameters changes.
+pub const INGEST_VERSION: u32 = 1;
+/// Version of the labels stage (reading and validating the labels file).
+pub const LABELS_VERSION: u32 = 1;
+
+/// Which pose is the template: a pose file name or stem, or a 0-based index into the
+/// sorted list.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum TemplateSpec {
+    Index(usize),
+    Name(String),
+}
+
+/// What ingest reads: the pose files and how to treat them.
+#[derive(Debug, Clone, Copy)]
+pub struct IngestParams<'a> {
+    /// Pose files, in pose order.
+    pub pose_files: &'a [PathBuf],
+    pub template: Option<&'a TemplateSpec>,
+    /// Use the template's triangles for every pose instead of requiring identical lists.
+    pub ignore_pose_faces: bool,
+}
+
+impl IngestParams<'_> {
+    /// The cache key: the bytes of every pose file (never their paths), the pose names,
+    /// the resolved template index.
+    pub fn key(&self) -> Result<(StageKey, usize)> {
+        let file_hashes = hash_files(self.pose_files)?;
+        let template = resolve_template(self.pose_files, self.template)?;
+        let names: Vec<String> = self.pose_files.iter().map(|f| pose_name(f)).collect();
+        let parameters = canonical_json(&json!({
+            "names": names,
+            "template": template,
+            "ignore_pose_faces": self.ignore_pose_faces,
+        }));
+        let key = StageKey {
+            stage: "ingest".into(),
+            stage_version: INGEST_VERSION,
+            format_version: ArtifactKind::PoseSet.current_version(),
+            resolved: parameters.clone(),
+            parameters,
+            inputs: file_hashes.iter().enumerate().map(|(k, h)| (format!("pose[{k}]"), *h)).collect(),
+        };
+        Ok((key, template))
+    }
+
+    /// Human-readable names of the key's inputs (file names only: paths never reach a key).
+    pub fn hints(&self) -> Vec<(String, String)> {
+        self.pose_files.iter().enumerate().map(|(k, f)| (format!("pose[{k}]"), file_name(f))).collect()
+    }
+
+    /// Reads and validates the pose files as a stage output.
+    pub fn compute(
+        &self,
+        template: usize,
+        progress: &dyn Progress,
+    ) -> Result<StageOutput<PoseSetV1, IngestSummary>> {
+        let (set, summary) = ingest_poses(self.pose_files, template, self.ignore_pose_faces, progress)?;
+        let note = format!(
+            "{} poses x {} vertices, {} faces, template {}",
+            summary.poses, summary.vertices, summary.faces, summary.template
+        );
+        Ok(StageOutput { body: PoseSetV1::from_pose_set(&set), summary, note })
+    }
+}
+
+/// The labels stage's key: the labels file's bytes, and the pose set they label.
+pub fn labels_key(labels_file: &Path, poses: ContentHash) -> Result<StageKey> {
+    let labels_hash = hash_files(&[labels_file.to_owned()])?[0];
+    Ok(StageKey {
+        stage: "labels".into(),
+        stage_version: LABELS_VERSION,
+        format_version: ArtifactKind::Labels.current_version(),
+        parameters: "{}".into(),
+        resolved: "{}".into(),
+        inputs: vec![("poses".into(), poses), ("labels_file".into(), labels_hash)],
+    })
+}
+
+/// `labels.json`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct LabelsSummary {
+    pub parts: Vec<String>,
+    pub vertices_per_part: Vec<usize>,
+}
+
+/// Reads and validates the labels of `set` as a stage output.
+pub fn compute_labels(labels_file: &Path, set: &PoseSet) -> Result<StageOutput<LabelsV1, LabelsSummary>> {
+    let labels = ingest_labels(labels_file, set)?;
+    let sizes: Vec<_> = labels.members().iter().map(Vec::len).collect();
+    let note =
+        format!("{} parts, smallest has {} vertices", labels.part_count(), sizes.iter().min().unwrap_or(&0));
+    let summary = LabelsSummary { parts: labels.names.clone(), vertices_per_part: sizes };
+    Ok(StageOutput { body: LabelsV1::from_labels(&labels), summary, note })
+}
+
+/// A path's file name, for hints and messages.
+pub fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+}
 
 /// Summary of an ingest, for the JSON sidecar and the run's log.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct IngestSummary {
     pub poses: usize,
     pub vertices: usize,

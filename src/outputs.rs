@@ -1,0 +1,257 @@
+//! The output folder: what `<out>/<dataset>` holds, the one writer of the registered
+//! simplified pose set, and how a folder is replaced (whole, through
+//! [`desal_io::replace_dir`], carrying `desal eval`'s `eval/` over).
+//!
+//! | file | from |
+//! |---|---|
+//! | `poses.dsa`, `labels.dsa`, `fit.dsa`, `saliency.dsa`, `simplified.dsa`, `map.dsa` | the stages' cache entries, copied (never linked: nothing done to the output folder reaches the cache) |
+//! | `<stage>.json` | each stage's typed summary |
+//! | `saliency.png`, `saliency.ply` | the saliency drawn on the template |
+//! | `simplified-template-raw.ply` | stage 3's template before mapping |
+//! | `simplified/<pose>.ply`, `simplified/parts.txt`, `vertex_map.txt` | the registered simplified pose set |
+//! | `report.json` | the run's report, with `outputs_key` |
+//! | `eval/` | `desal eval`'s, kept across runs |
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use desal_io::artifact::{ContentHash, MapV1};
+use desal_mesh::{PartLabels, PoseSet, TriMesh};
+use serde::Serialize;
+
+use crate::cache::canonical_json;
+use crate::stages::DatasetStages;
+use crate::stages::runner::StageRecord;
+
+/// `desal eval`'s folder inside a dataset's output folder: kept when `desal run` replaces
+/// the rest (it depends on the pipeline's inputs, not on the run's stage parameters).
+pub const KEPT_SUBFOLDER: &str = "eval";
+
+/// Writes one derived output file to the path it is given.
+pub type FileWriter = Box<dyn FnOnce(&Path) -> Result<()> + Send>;
+
+/// Everything a dataset run leaves in its output folder.
+pub struct DatasetOutputs {
+    /// `(file name in the output folder, cache artifact to copy)`.
+    pub artifacts: Vec<(String, PathBuf)>,
+    /// `(relative path, writer)` for derived files (PLY, PNG, text, JSON).
+    pub files: Vec<(String, FileWriter)>,
+}
+
+impl std::fmt::Debug for DatasetOutputs {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let files: Vec<&str> = self.files.iter().map(|(name, _)| name.as_str()).collect();
+        f.debug_struct("DatasetOutputs").field("artifacts", &self.artifacts).field("files", &files).finish()
+    }
+}
+
+impl DatasetOutputs {
+    /// Every relative path the outputs write, in write order.
+    pub fn names(&self) -> Vec<String> {
+        self.artifacts
+            .iter()
+            .map(|(name, _)| name.clone())
+            .chain(self.files.iter().map(|(n, _)| n.clone()))
+            .collect()
+    }
+
+    /// Writes every output into `dir` (which exists).
+    pub fn write_into(self, dir: &Path) -> Result<()> {
+        for (file, source) in &self.artifacts {
+            let dest = dir.join(file);
+            std::fs::copy(source, &dest)
+                .with_context(|| format!("cannot copy {} to {}", source.display(), dest.display()))?;
+        }
+        for (file, write) in self.files {
+            let path = dir.join(&file);
+            if let Some(parent) = path.parent() {
+                std::fs::create_dir_all(parent)
+                    .with_context(|| format!("cannot create {}", parent.display()))?;
+            }
+            write(&path).with_context(|| format!("cannot write {file}"))?;
+        }
+        Ok(())
+    }
+}
+
+/// Everything the dataset's output folder holds (decodes the bodies it needs).
+pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<DatasetOutputs> {
+    let set = stages.pose_set()?;
+    let part_labels = stages.part_labels()?;
+    let map = stages.map.body()?;
+    let (simple_set, simple_labels) = crate::stages::map::apply(map, set, part_labels)?;
+    let mut outputs = DatasetOutputs { artifacts: Vec::new(), files: Vec::new() };
+    add_saliency_pictures(
+        &mut outputs,
+        set.template_mesh(),
+        stages.saliency.body()?.saliency.clone(),
+        up_axis,
+    )?;
+    let raw = crate::stages::simplify::mesh(stages.simplified.body()?);
+    outputs.files.push((
+        "simplified-template-raw.ply".into(),
+        Box::new(move |p| Ok(desal_io::ply::write_ply(p, &raw, &desal_io::ply::PlyWriteOptions::default())?)),
+    ));
+    outputs.files.extend(simplified_pose_set("simplified/", map, simple_set, simple_labels));
+    add_artifact(&mut outputs, "poses", &stages.poses.artifact_path, &stages.poses.summary);
+    add_artifact(&mut outputs, "labels", &stages.labels.artifact_path, &stages.labels.summary);
+    add_artifact(&mut outputs, "fit", &stages.fit.artifact_path, &stages.fit.summary);
+    add_artifact(&mut outputs, "saliency", &stages.saliency.artifact_path, &stages.saliency.summary);
+    add_artifact(&mut outputs, "simplified", &stages.simplified.artifact_path, &stages.simplified.summary);
+    add_artifact(&mut outputs, "map", &stages.map.artifact_path, &stages.map.summary);
+    Ok(outputs)
+}
+
+/// `saliency.png` (the paper's Fig. 1) and `saliency.ply` (colours + a `saliency`
+/// float property) of the template.
+fn add_saliency_pictures(
+    outputs: &mut DatasetOutputs,
+    template: TriMesh,
+    saliency: Vec<f64>,
+    up_axis: Option<&str>,
+) -> Result<()> {
+    let up = crate::pictures::parse_up_axis(up_axis)?;
+    let png = crate::pictures::heatmap_png(
+        &template,
+        desal_viz::Scalar::PerVertex(&saliency),
+        up,
+        "deformation saliency",
+        "0-1",
+        Some((0.0, 1.0)),
+    )?;
+    outputs.files.push(("saliency.png".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, &png)?))));
+    outputs.files.push((
+        "saliency.ply".into(),
+        Box::new(move |p| crate::pictures::write_scalar_ply(p, &template, "saliency", &saliency)),
+    ));
+    Ok(())
+}
+
+/// Puts `<name>.dsa` (the cached artifact) and `<name>.json` (its summary) in the outputs.
+fn add_artifact(outputs: &mut DatasetOutputs, name: &str, artifact: &Path, summary: &impl Serialize) {
+    outputs.artifacts.push((format!("{name}.dsa"), artifact.to_owned()));
+    let summary = serde_json::to_value(summary).expect("summaries serialise");
+    outputs.files.push((format!("{name}.json"), Box::new(move |p| Ok(desal_io::write_json(p, &summary)?))));
+}
+
+/// The registered simplified pose set, the one writer of it: `<poses_dir><pose>.ply` for
+/// every pose, `<poses_dir>parts.txt`, and `vertex_map.txt` (one original index per
+/// simplified vertex, in simplified-vertex order).
+pub fn simplified_pose_set(
+    poses_dir: &str,
+    map: &MapV1,
+    set: PoseSet,
+    labels: PartLabels,
+) -> Vec<(String, FileWriter)> {
+    use desal_io::ply::{PlyWriteOptions, write_ply};
+    let mut files: Vec<(String, FileWriter)> = Vec::new();
+    let text: String = map.simp_to_orig.iter().map(|i| format!("{i}\n")).collect();
+    files.push(("vertex_map.txt".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, text.as_bytes())?))));
+    files.push((
+        format!("{poses_dir}parts.txt"),
+        Box::new(move |p| Ok(desal_io::labels::write_labels_txt(p, &labels)?)),
+    ));
+    let set = std::sync::Arc::new(set);
+    for pose in 0..set.pose_count() {
+        let set = set.clone();
+        files.push((
+            format!("{poses_dir}{}.ply", set.names[pose]),
+            Box::new(move |p| Ok(write_ply(p, &set.pose_mesh(pose), &PlyWriteOptions::default())?)),
+        ));
+    }
+    files
+}
+
+/// Writes loose output files (a single-stage command's artifact and pictures) all or
+/// nothing: each goes to a temp name beside its destination first, and only when every
+/// one is written are they renamed into place. A failure leaves none of them.
+pub fn write_all_or_nothing(files: Vec<(PathBuf, FileWriter)>) -> Result<()> {
+    let pid = std::process::id();
+    let partial = |dest: &Path| {
+        let name = dest.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        dest.with_file_name(format!(".{name}.partial-{pid}"))
+    };
+    let mut written: Vec<(PathBuf, PathBuf)> = Vec::new();
+    let result = (|| -> Result<()> {
+        for (dest, write) in files {
+            if dest.is_dir() {
+                bail!("{} is a folder: give a file path", dest.display());
+            }
+            let tmp = partial(&dest);
+            written.push((tmp.clone(), dest.clone()));
+            write(&tmp).with_context(|| format!("cannot write {}", dest.display()))?;
+        }
+        for (tmp, dest) in &written {
+            std::fs::rename(tmp, dest).with_context(|| format!("cannot write {}", dest.display()))?;
+        }
+        Ok(())
+    })();
+    if result.is_err() {
+        for (tmp, _) in &written {
+            let _ = std::fs::remove_file(tmp);
+        }
+    }
+    result
+}
+
+/// Identifies a dataset's output folder content: every stage's cache key, plus what the
+/// derived files depend on beyond them (the picture's up axis, the desal version).
+pub fn outputs_key(records: &[StageRecord], up_axis: Option<&str>) -> String {
+    let keys: Vec<&str> = records.iter().map(|r| r.cache_key.as_str()).collect();
+    let text = canonical_json(&serde_json::json!({
+        "stages": keys,
+        "up_axis": up_axis,
+        "desal": env!("CARGO_PKG_VERSION"),
+    }));
+    ContentHash::of(text.as_bytes()).to_hex()
+}
+
+/// The output folder's file list when its report.json carries `outputs_key` and every
+/// listed file is present; `None` when the outputs must be written.
+pub fn outputs_in_place(out_dir: &Path, outputs_key: &str) -> Option<Vec<String>> {
+    let old: serde_json::Value = desal_io::atomic::read_json(&out_dir.join("report.json")).ok()?;
+    if old.get("outputs_key")?.as_str()? != outputs_key {
+        return None;
+    }
+    let files: Vec<String> =
+        old.get("files")?.as_array()?.iter().map(|f| f.as_str().map(str::to_owned)).collect::<Option<_>>()?;
+    files.iter().all(|f| out_dir.join(f).exists()).then_some(files)
+}
+
+/// Refuses to take over a folder that `desal run` did not write: the output folder is
+/// replaced whole, so a non-empty folder without a `report.json` (someone's own files, or
+/// a typo in `out` or `name`) would be lost.
+pub fn check_output_folder(out_dir: &Path) -> Result<()> {
+    if !out_dir.exists() {
+        return Ok(());
+    }
+    if !out_dir.is_dir() {
+        bail!(
+            "output folder {} exists and is not a folder; remove it or change `out`/`name`",
+            out_dir.display()
+        );
+    }
+    let mut entries = std::fs::read_dir(out_dir)
+        .with_context(|| format!("cannot read output folder {}", out_dir.display()))?;
+    if entries.next().is_some() && !out_dir.join("report.json").is_file() {
+        bail!(
+            "output folder {} is not empty and holds no report.json, so desal did not write it; \
+             desal replaces its output folder whole: move those files away or change `out`/`name`",
+            out_dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// Replaces `out_dir` by a folder holding `outputs` and `report.json`, carrying `eval/`
+/// over: the folder is the previous run's or this run's, never a mix.
+pub fn write_outputs(out_dir: &Path, outputs: DatasetOutputs, report: &impl Serialize) -> Result<()> {
+    // Checked again right before the swap: the caller checked before the stages ran, and
+    // someone may have written into the folder since.
+    check_output_folder(out_dir)?;
+    desal_io::replace_dir(out_dir, &[KEPT_SUBFOLDER], |tmp| -> Result<()> {
+        outputs.write_into(tmp)?;
+        desal_io::write_json(&tmp.join("report.json"), report)?;
+        Ok(())
+    })
+}
