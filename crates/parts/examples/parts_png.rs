@@ -1,0 +1,107 @@
+//! Discovers the parts of a directory of registered PLY/OBJ poses (sorted by name, the
+//! first one the template) and draws them on the template, one colour per part, as a
+//! PNG — what the driver's `parts.png` will show. With a label file, also draws the
+//! given parts beside them and prints the adjusted Rand index and stage 1's residual of
+//! both.
+//!
+//! `cargo run --release -p desal-parts --example parts_png -- POSE_DIR OUT.png [K] [LABELS]`
+//!
+//! SCAPE: `... -- ../shared/datasets/scape /tmp/scape-parts.png 16 ../shared/datasets/scape/vertex_part_labels_16.txt`
+//! The sample: `... -- data-samples/poses /tmp/sample-parts.png 16 data-samples/labels.txt`
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use desal_fit::{FitConfig, fit_pose_set};
+use desal_mesh::{NoProgress, PartLabels, PoseSet};
+use desal_parts::{PartsConfig, adjusted_rand_index, discover_parts};
+use desal_viz::{RenderConfig, RgbaImage, Scalar, encode_png, render_heatmap};
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    if !(2..=4).contains(&args.len()) {
+        eprintln!("usage: parts_png POSE_DIR OUT.png [K] [LABELS]");
+        std::process::exit(2);
+    }
+    let poses = read_poses(Path::new(&args[0]));
+    let parts = args.get(2).map(|k| k.parse::<usize>().expect("K is a whole number"));
+    let given = args.get(3).map(|p| desal_io::labels::read_labels(Path::new(p)).expect("label file"));
+
+    let start = Instant::now();
+    let config = PartsConfig { parts, ..PartsConfig::default() };
+    let (auto, report) = discover_parts(&poses, &config).expect("discovery");
+    println!(
+        "{} poses x {} vertices: {} parts in {:.0} ms ({} border sweeps), mean residual {:.3} mm",
+        poses.pose_count(),
+        poses.vertex_count(),
+        auto.part_count(),
+        start.elapsed().as_secs_f64() * 1e3,
+        report.sweeps,
+        report.mean_residual * 1e3
+    );
+    println!("parts: mean residual (mm) before the borders are relaxed");
+    for point in &report.curve {
+        let mark = if point.parts == report.parts { "  <- returned" } else { "" };
+        println!("  {:>3}: {:8.3}{mark}", point.parts, point.mean_residual * 1e3);
+    }
+    println!("part sizes: {:?}", report.part_sizes);
+
+    let mut panels = vec![draw(&poses, &auto, &format!("{} discovered parts", auto.part_count()))];
+    if let Some(given) = &given {
+        let residual = |labels: &PartLabels| {
+            fit_pose_set(&poses, labels, &FitConfig::default(), &NoProgress)
+                .expect("fit")
+                .summary
+                .mean_residual
+                * 1e3
+        };
+        println!(
+            "against the given labels: ARI {:.3}; mean residual {:.3} mm (given {:.3} mm)",
+            adjusted_rand_index(&auto.labels, &given.labels),
+            residual(&auto),
+            residual(given)
+        );
+        panels.push(draw(&poses, given, &format!("{} given parts", given.part_count())));
+    }
+    let out = &args[1];
+    std::fs::write(out, encode_png(&RgbaImage::hstack(&panels, [255, 255, 255, 255])).expect("png"))
+        .expect("write png");
+    println!("wrote {out}");
+}
+
+fn read_poses(dir: &Path) -> PoseSet {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .expect("pose directory")
+        .map(|e| e.expect("directory entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "ply" || e == "obj"))
+        .collect();
+    files.sort();
+    let meshes: Vec<_> = files.iter().map(|f| desal_io::read_mesh(f).expect("pose file")).collect();
+    let names = files.iter().map(|f| f.file_stem().unwrap().to_string_lossy().into_owned()).collect();
+    let faces = meshes[0].faces.clone();
+    PoseSet::try_new(names, meshes.into_iter().map(|m| m.positions).collect(), faces, 0)
+        .expect("registered poses")
+}
+
+/// The parts on the template: each face takes the part of the majority of its corners
+/// (ties: its first corner's), and part `k` the colour-map value `frac(k · φ)`, so
+/// parts with neighbouring ids get far-apart colours.
+fn draw(poses: &PoseSet, labels: &PartLabels, title: &str) -> RgbaImage {
+    let golden = (5f64.sqrt() - 1.0) / 2.0;
+    let values: Vec<f64> = poses
+        .faces
+        .iter()
+        .map(|f| {
+            let [a, b, c] = f.map(|v| labels.labels[v as usize]);
+            let part = if b == c { b } else { a };
+            (part as f64 * golden).fract()
+        })
+        .collect();
+    let config = RenderConfig {
+        title: title.into(),
+        range: Some((0.0, 1.0)),
+        colour_bar: false,
+        ..RenderConfig::default()
+    };
+    render_heatmap(&poses.template_mesh(), Scalar::PerFace(&values), &config).expect("render")
+}
