@@ -1,8 +1,8 @@
 //! Discovers the parts of a directory of registered PLY/OBJ poses (sorted by name, the
 //! first one the template) and draws them on the template, one colour per part, as a
 //! PNG — what the driver's `parts.png` will show. With a label file, also draws the
-//! given parts beside them and prints the adjusted Rand index and stage 1's residual of
-//! both.
+//! given parts beside them (each discovered part in the colour of the given part it
+//! overlaps most) and prints the adjusted Rand index and stage 1's residual of both.
 //!
 //! `cargo run --release -p desal-parts --example parts_png -- POSE_DIR OUT.png [K] [LABELS]`
 //!
@@ -46,8 +46,28 @@ fn main() {
     }
     println!("part sizes: {:?}", report.part_sizes);
 
-    let mut panels = vec![draw(&poses, &auto, &format!("{} discovered parts", auto.part_count()))];
+    let mut panels = Vec::new();
     if let Some(given) = &given {
+        // Each discovered part takes the colour of the given part it overlaps most, so
+        // that the two drawings compare at a glance.
+        let mut colour = vec![0u32; auto.part_count()];
+        for (k, members) in auto.members().iter().enumerate() {
+            let mut overlap = vec![0usize; given.part_count()];
+            for &v in members {
+                overlap[given.labels[v as usize] as usize] += 1;
+            }
+            colour[k] =
+                (0..overlap.len()).max_by_key(|&g| (overlap[g], std::cmp::Reverse(g))).unwrap_or(0) as u32;
+            println!(
+                "  part {k:>2}: {:>5} vertices, {:>5.1} % in given part {} ('{}')",
+                members.len(),
+                100.0 * overlap[colour[k] as usize] as f64 / members.len() as f64,
+                colour[k],
+                given.names[colour[k] as usize]
+            );
+        }
+        let matched = PartLabels::from_ids(auto.labels.iter().map(|&k| colour[k as usize]).collect());
+        panels.push(draw(&poses, &matched, &format!("{} discovered parts", auto.part_count())));
         let residual = |labels: &PartLabels| {
             fit_pose_set(&poses, labels, &FitConfig::default(), &NoProgress)
                 .expect("fit")
@@ -62,6 +82,8 @@ fn main() {
             residual(given)
         );
         panels.push(draw(&poses, given, &format!("{} given parts", given.part_count())));
+    } else {
+        panels.push(draw(&poses, &auto, &format!("{} discovered parts", auto.part_count())));
     }
     let out = &args[1];
     std::fs::write(out, encode_png(&RgbaImage::hstack(&panels, [255, 255, 255, 255])).expect("png"))

@@ -7,11 +7,10 @@
 //! are a part. The story:
 //! 1. cut the template into a few hundred small connected patches (`hierarchy`);
 //! 2. merge adjacent parts bottom-up, cheapest first: the pair whose union adds least
-//!    to the summed squared rigid-fit residual over all poses (exact, from moments);
-//! 3. replay the merges to every part count up to `max_parts` and measure stage 1's
-//!    mean residual there: the knee curve; keep the requested count, or the count at
-//!    the knee (or the first count that explains every vertex within
-//!    `rigid_tolerance`);
+//!    to stage 1's residual summed over all vertices and poses; the residual after each
+//!    merge, up to `max_parts` parts, is the knee curve;
+//! 3. keep the requested count, or the count at the knee (or the first count whose
+//!    mean residual is within `rigid_tolerance`), and replay the merges to it;
 //! 4. relax the borders at that count: refit every part, move each border vertex to
 //!    the neighbouring part that explains it best, give every stray island of a part
 //!    to the neighbouring part that explains it best, dissolve parts too small to fit;
@@ -79,25 +78,23 @@ pub fn discover_parts(
     }
 
     let (patch, patch_count) = cut_patches(&graph, template, &pieces, config.patches);
-    let merges = merge_sequence(&data, &graph, &patch, patch_count);
-    let fewest = patch_count - merges.len();
+    let sequence = merge_sequence(&data, &graph, &patch, patch_count);
+    let fewest = patch_count - sequence.merges.len();
     let most = config.max_parts.max(config.parts.unwrap_or(0)).min(patch_count).max(fewest);
-    let at = |parts: usize| compact(&replay(&patch, patch_count, &merges, patch_count - parts));
-    let mut curve = Vec::new();
-    let mut explained = None;
-    for parts in fewest..=most {
-        let state = State::new(&data, &graph, at(parts), parts);
-        curve.push(CurvePoint { parts, mean_residual: state.mean_residual() });
-        if explained.is_none() && state.worst_cost() <= tolerance {
-            explained = Some(curve.len() - 1);
-        }
-    }
+    let samples = (data.vertex_count * data.pose_count) as Real;
+    let curve: Vec<CurvePoint> = (fewest..=most)
+        .map(|parts| CurvePoint { parts, mean_residual: sequence.residual[patch_count - parts] / samples })
+        .collect();
+    // Without K, a count that explains the motion to within the tolerance on average
+    // needs no knee.
+    let explained = curve.iter().position(|c| c.mean_residual * data.pose_count as Real <= tolerance);
     let chosen = match config.parts {
         Some(k) => curve.iter().rposition(|c| c.parts <= k).unwrap_or(0),
         None => explained.unwrap_or_else(|| knee_index(&curve)),
     };
     let parts = curve[chosen].parts;
-    let mut state = State::new(&data, &graph, at(parts), parts);
+    let labels = compact(&replay(&patch, patch_count, &sequence.merges, patch_count - parts));
+    let mut state = State::new(&data, &graph, labels, parts);
     let sweeps = relax_borders(&mut state, config);
     finish(poses, &data, &state, config, curve, chosen, false, sweeps)
 }

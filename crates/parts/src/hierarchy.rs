@@ -1,9 +1,9 @@
-//! The coarse-to-fine half of discovery: cut the template into many small patches
+//! The bottom-up half of discovery: cut the template into many small patches
 //! (farthest-point seeds, geodesic Voronoi cells along the mesh's edges), then merge
-//! adjacent parts bottom-up, always the pair whose union adds the least to the summed
-//! squared rigid-fit residual (Ward's criterion, with stage 1's rigid fit as the
-//! "centroid"). Moments add up, so a merge's cost is exact and needs no per-vertex
-//! work. Replaying the first merges gives the parts at every count.
+//! adjacent parts, always the pair whose union adds least to stage 1's residual (an
+//! agglomerative clustering in the manner of Ward's, with a rigid fit per pose as the
+//! "centroid"). Moments add up, so a union's fit needs no pass over its vertices; its
+//! residual does. Replaying the first merges gives the parts at every count.
 
 use std::cmp::Reverse;
 use std::collections::{BTreeSet, BinaryHeap};
@@ -12,7 +12,7 @@ use desal_mesh::math::{Real, Vec3};
 use rayon::prelude::*;
 
 use crate::graph::VertexGraph;
-use crate::motion::{Moments, PoseData};
+use crate::motion::{Moments, PartMotion, PoseData};
 
 /// Patch id per vertex: `patches` farthest-point seeds (the first one of each initial
 /// piece is its smallest vertex; each next one the vertex farthest along the edges from
@@ -75,20 +75,42 @@ pub(crate) fn cut_patches(
 /// Non-negative costs order like their bits; a pair whose versions are stale is skipped.
 type Candidate = (u64, u32, u32, u32, u32);
 
-/// The bottom-up merge sequence of the patches: `merges[i] = (kept, absorbed)` patch
-/// ids, cheapest first (ties by the id pair). Stops when no two parts are adjacent.
+/// The bottom-up merges of the patches, cheapest first.
+#[derive(Debug, Clone)]
+pub(crate) struct MergeSequence {
+    /// `merges[i] = (kept, absorbed)` patch ids, in order.
+    pub(crate) merges: Vec<(u32, u32)>,
+    /// `residual[i]`: stage 1's summed residual (over every vertex and non-template
+    /// pose, mesh units) with the parts left after the first `i` merges.
+    pub(crate) residual: Vec<Real>,
+}
+
+/// Merges adjacent parts bottom-up, always the pair whose union adds least to stage
+/// 1's summed residual `Σ_poses Σ_v ‖R v_T + t − v_X‖` (the union fitted from the
+/// summed moments, its residual measured per vertex); ties by the id pair. Stops when
+/// no two parts are adjacent.
+///
+/// The distance, not its square, is the criterion because it is the figure stage 1
+/// reports and saliency sums: measured on SCAPE with K = 16, the squared criterion
+/// (exact from moments alone, 3× cheaper) merges the hands into the forearms and
+/// splits the chest in three instead (ARI 0.725 against the hand-made parts, 13.56 mm)
+/// where the distance finds the hand-made structure part for part (0.767, 13.34 mm).
 pub(crate) fn merge_sequence(
     data: &PoseData,
     graph: &VertexGraph,
     patch: &[u32],
     patch_count: usize,
-) -> Vec<(u32, u32)> {
+) -> MergeSequence {
     let mut members = vec![Vec::new(); patch_count];
     for (v, &p) in patch.iter().enumerate() {
         members[p as usize].push(v as u32);
     }
+    let residual_of = |moments: &Moments, vertices: &[u32]| -> Real {
+        let motion = PartMotion::from_moments(moments);
+        vertices.iter().map(|&v| motion.cost(data, v as usize)).sum()
+    };
     let mut moments: Vec<Moments> = members.par_iter().map(|m| Moments::of(data, m)).collect();
-    let mut error: Vec<Real> = moments.par_iter().map(Moments::squared_error).collect();
+    let mut error: Vec<Real> = moments.par_iter().zip(&members).map(|(m, v)| residual_of(m, v)).collect();
     let mut neighbours: Vec<BTreeSet<u32>> = vec![BTreeSet::new(); patch_count];
     for v in 0..patch.len() {
         for &u in graph.around(v) {
@@ -98,20 +120,28 @@ pub(crate) fn merge_sequence(
             }
         }
     }
-    let merge_cost = |moments: &[Moments], error: &[Real], a: u32, b: u32| {
+    let merge_cost = |moments: &[Moments], members: &[Vec<u32>], error: &[Real], a: u32, b: u32| {
         let mut union = moments[a as usize].clone();
         union.add(&moments[b as usize]);
-        (union.squared_error() - error[a as usize] - error[b as usize]).max(0.0)
+        let (ma, mb) = (&members[a as usize], &members[b as usize]);
+        let motion = PartMotion::from_moments(&union);
+        let joint: Real = ma.iter().chain(mb).map(|&v| motion.cost(data, v as usize)).sum();
+        (joint - error[a as usize] - error[b as usize]).max(0.0)
     };
     let pairs: Vec<(u32, u32)> = (0..patch_count as u32)
         .flat_map(|a| neighbours[a as usize].iter().filter(move |&&b| b > a).map(move |&b| (a, b)))
         .collect();
-    let costs: Vec<Real> = pairs.par_iter().map(|&(a, b)| merge_cost(&moments, &error, a, b)).collect();
+    let costs: Vec<Real> =
+        pairs.par_iter().map(|&(a, b)| merge_cost(&moments, &members, &error, a, b)).collect();
     let mut version = vec![0u32; patch_count];
     let mut heap: BinaryHeap<Reverse<Candidate>> =
         pairs.iter().zip(&costs).map(|(&(a, b), c)| Reverse((c.to_bits(), a, b, 0, 0))).collect();
     let mut alive = vec![true; patch_count];
-    let mut merges = Vec::with_capacity(patch_count);
+    let total = |error: &[Real], alive: &[bool]| {
+        (0..error.len()).filter(|&p| alive[p]).map(|p| error[p]).sum::<Real>()
+    };
+    let mut sequence =
+        MergeSequence { merges: Vec::with_capacity(patch_count), residual: vec![total(&error, &alive)] };
     while let Some(Reverse((_, a, b, va, vb))) = heap.pop() {
         if !(alive[a as usize] && alive[b as usize]) || version[a as usize] != va || version[b as usize] != vb
         {
@@ -119,27 +149,29 @@ pub(crate) fn merge_sequence(
         }
         let absorbed = moments[b as usize].clone();
         moments[a as usize].add(&absorbed);
-        error[a as usize] = moments[a as usize].squared_error();
+        let moved = std::mem::take(&mut members[b as usize]);
+        members[a as usize].extend(moved);
+        error[a as usize] = residual_of(&moments[a as usize], &members[a as usize]);
         alive[b as usize] = false;
         version[a as usize] += 1;
-        let moved = std::mem::take(&mut neighbours[b as usize]);
-        for &c in &moved {
+        for c in std::mem::take(&mut neighbours[b as usize]) {
             neighbours[c as usize].remove(&b);
             if c != a {
                 neighbours[c as usize].insert(a);
                 neighbours[a as usize].insert(c);
             }
         }
-        neighbours[a as usize].remove(&b);
-        merges.push((a, b));
+        sequence.merges.push((a, b));
+        sequence.residual.push(total(&error, &alive));
         let around: Vec<u32> = neighbours[a as usize].iter().copied().collect();
-        let costs: Vec<Real> = around.par_iter().map(|&c| merge_cost(&moments, &error, a, c)).collect();
+        let costs: Vec<Real> =
+            around.par_iter().map(|&c| merge_cost(&moments, &members, &error, a, c)).collect();
         for (&c, cost) in around.iter().zip(costs) {
             let (x, y) = if a < c { (a, c) } else { (c, a) };
             heap.push(Reverse((cost.to_bits(), x, y, version[x as usize], version[y as usize])));
         }
     }
-    merges
+    sequence
 }
 
 /// Patch labels after the first `count` merges: each vertex's part is the surviving

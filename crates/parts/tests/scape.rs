@@ -5,14 +5,18 @@
 //! knee curve of a run without K. Skipped, with a printed reason, when the dataset is
 //! absent.
 //!
-//! Measured: ARI 0.725, saliency r 0.589, 13.56 mm against the hand-made 14.52 mm. The
-//! residual target (no higher than the hand-made parts) is met; the ARI >= 0.8
-//! and r >= 0.9 are NOT: the assertions below hold the reached figures (with a small
-//! margin) so that a regression fails, and do not claim the issue's. Why: relaxing the
-//! hand-made parts' own borders by this crate's rule lowers their residual to 13.34 mm
-//! and moves them to ARI 0.773 against themselves (the torso's chest/stomach/hip borders
-//! are soft, so the rigid-fit optimum puts them elsewhere), so residual-optimal parts
-//! cannot be expected to reach 0.8.
+//! Measured: ARI 0.767, saliency r 0.763, 13.34 mm against the hand-made 14.52 mm; the
+//! sixteen parts match the hand-made ones one to one (each discovered part has most of
+//! its vertices in a different hand-made part: `examples/parts_png.rs` prints the
+//! table). The residual target (no higher than the hand-made parts) is met; the
+//! issue's ARI >= 0.8 and r >= 0.9 are NOT: the assertions below hold the reached
+//! figures (with a small margin) so that a regression fails, and do not claim the
+//! issue's. Why they are out of reach for parts judged by the rigid-fit residual: the
+//! hand-made parts themselves, their borders relaxed by this crate's rule
+//! (`scape_relaxing_the_hand_made_borders`), fall to 13.34 mm but move to ARI 0.773 and
+//! saliency r 0.779 against their own starting point — the torso's chest/stomach/hip
+//! borders and the shoulders are soft, and the residual optimum puts those borders
+//! elsewhere than the hand did.
 //!
 //! Figures: `cargo test --release -p desal-parts --test scape -- --nocapture`.
 
@@ -74,8 +78,8 @@ fn scape_sixteen_parts_match_the_hand_made_ones() {
         "{} vs {mm_auto}",
         report.mean_residual * 1e3
     );
-    assert!(ari >= 0.7, "ARI {ari}");
-    assert!(r >= 0.55, "saliency r {r}");
+    assert!(ari >= 0.75, "ARI {ari}");
+    assert!(r >= 0.74, "saliency r {r}");
     assert!(mm_auto <= mm_given, "{mm_auto} mm > {mm_given} mm");
 }
 
@@ -98,10 +102,11 @@ fn scape_relaxing_the_hand_made_borders() {
     let config = PartsConfig { relax_sweeps: 200, ..PartsConfig::default() };
     let (refined, report) = refine_parts(&poses, &given, &config).unwrap();
     let ari = adjusted_rand_index(&refined.labels, &given.labels);
-    let (before, after) =
-        (fit(&poses, &given).summary.mean_residual * 1e3, fit(&poses, &refined).summary.mean_residual * 1e3);
+    let (fit_given, fit_refined) = (fit(&poses, &given), fit(&poses, &refined));
+    let (before, after) = (fit_given.summary.mean_residual * 1e3, fit_refined.summary.mean_residual * 1e3);
+    let r = pearson(&saliency(&poses, &fit_refined), &saliency(&poses, &fit_given));
     eprintln!(
-        "hand-made parts relaxed: {before:.3} mm -> {after:.3} mm in {} sweeps, ARI {ari:.3} against themselves",
+        "hand-made parts relaxed: {before:.3} mm -> {after:.3} mm in {} sweeps; ARI {ari:.3}, saliency r {r:.3} against themselves",
         report.sweeps
     );
     assert!(after < before);
