@@ -112,3 +112,25 @@ fn scape_relaxing_the_hand_made_borders() {
     assert!(after < before);
     assert!(ari < 0.8, "relaxed hand-made parts stay within ARI {ari} of themselves");
 }
+
+/// The real data at full size: one and two rayon threads give the same labels and the
+/// same knee curve, bit for bit.
+#[test]
+fn scape_labels_do_not_depend_on_the_thread_count() {
+    let Some((poses, _)) = desal_testdata::scape() else { return };
+    let config = PartsConfig { parts: Some(16), ..PartsConfig::default() };
+    let run = |threads| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| discover_parts(&poses, &config).unwrap())
+    };
+    let ((one, report_one), (two, report_two)) = (run(1), run(2));
+    assert_eq!(one, two);
+    let bits = |r: &PartsReport| {
+        r.curve
+            .iter()
+            .map(|c| c.mean_residual.to_bits())
+            .chain([r.mean_residual.to_bits()])
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&report_one), bits(&report_two));
+}
