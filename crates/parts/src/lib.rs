@@ -5,7 +5,9 @@
 //! - [`discover_parts`] ([`discover`]): the one entry point — pose set and
 //!   [`PartsConfig`] in, [`desal_mesh::PartLabels`] (vertex index space of the pose set)
 //!   and a [`PartsReport`] out, with the residual-against-part-count curve whose knee
-//!   picks the count when none is given.
+//!   picks the count when none is given. [`refine_parts`] relaxes the borders of given
+//!   parts by the same rule.
+//! - `hierarchy`: the template cut into patches and their bottom-up merges.
 //! - `motion`: per-part rigid fits onto every pose (stage 1's Kabsch solver from
 //!   `desal-fit`) and the per-vertex residual they are judged by.
 //! - `graph`: the vertex graph parts must be connected on, and its components.

@@ -8,6 +8,8 @@
 //! poses, and the chest keeps two small clavicle parts instead).
 //! Figures: `cargo test --release -p desal-parts --test sample -- --nocapture`.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
 use desal_fit::{FitConfig, fit_pose_set};
@@ -45,6 +47,7 @@ fn sample_sixteen_parts_against_the_shipped_labels() {
     eprintln!("sample: ARI {ari:.3}, mean residual {mm_auto:.3} mm (shipped labels {mm_given:.3} mm)");
     eprintln!("part sizes: {:?}", report.part_sizes);
     assert_eq!(auto.part_count(), 16);
+    common::assert_connected_parts(&poses, &auto);
     assert!(ari >= 0.9, "ARI {ari}");
     assert!(mm_auto <= mm_given, "{mm_auto} mm > {mm_given} mm");
 }

@@ -20,6 +20,8 @@
 //!
 //! Figures: `cargo test --release -p desal-parts --test scape -- --nocapture`.
 
+mod common;
+
 use desal_fit::{FitConfig, FitResult, fit_pose_set};
 use desal_mesh::math::Real;
 use desal_mesh::{NoProgress, PartLabels, PoseSet};
@@ -66,6 +68,7 @@ fn scape_sixteen_parts_match_the_hand_made_ones() {
     print_curve(&report);
     eprintln!("part sizes: {:?} ({} border sweeps)", report.part_sizes, report.sweeps);
     assert_eq!(auto.part_count(), 16);
+    common::assert_connected_parts(&poses, &auto);
 
     let ari = adjusted_rand_index(&auto.labels, &given.labels);
     let (fit_auto, fit_given) = (fit(&poses, &auto), fit(&poses, &given));
