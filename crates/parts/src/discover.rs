@@ -95,6 +95,8 @@ pub fn discover_parts(
     let parts = curve[chosen].parts;
     let labels = compact(&replay(&patch, patch_count, &sequence.merges, patch_count - parts));
     let mut state = State::new(&data, &graph, labels, parts);
+    // A patch too small to fit may survive the merges; it goes before the borders move.
+    dissolve_small_parts(&mut state, config);
     let sweeps = relax_borders(&mut state, config);
     finish(poses, &data, &state, config, curve, chosen, false, sweeps)
 }
@@ -131,7 +133,7 @@ fn finish(
     Ok((labels, report))
 }
 
-/// Relaxes the borders of given parts by the same rule discovery uses (step 3 of the
+/// Relaxes the borders of given parts by the same rule discovery uses (step 4 of the
 /// module doc) and returns them renumbered by smallest vertex, with a one-point curve.
 pub fn refine_parts(
     poses: &PoseSet,
@@ -145,6 +147,7 @@ pub fn refine_parts(
     let mut state = State::new(&data, &graph, labels.labels.clone(), labels.part_count());
     make_connected(&mut state);
     state.refit();
+    dissolve_small_parts(&mut state, config);
     let sweeps = relax_borders(&mut state, config);
     let labels = number_by_smallest_vertex(&state.labels);
     let report = PartsReport {

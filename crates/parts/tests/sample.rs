@@ -48,6 +48,7 @@ fn sample_sixteen_parts_against_the_shipped_labels() {
     eprintln!("part sizes: {:?}", report.part_sizes);
     assert_eq!(auto.part_count(), 16);
     common::assert_connected_parts(&poses, &auto);
+    assert!(report.part_sizes.iter().all(|&n| n >= config.min_part_vertices), "{:?}", report.part_sizes);
     assert!(ari >= 0.9, "ARI {ari}");
     assert!(mm_auto <= mm_given, "{mm_auto} mm > {mm_given} mm");
 }

@@ -69,6 +69,7 @@ fn scape_sixteen_parts_match_the_hand_made_ones() {
     eprintln!("part sizes: {:?} ({} border sweeps)", report.part_sizes, report.sweeps);
     assert_eq!(auto.part_count(), 16);
     common::assert_connected_parts(&poses, &auto);
+    assert!(report.part_sizes.iter().all(|&n| n >= config.min_part_vertices), "{:?}", report.part_sizes);
 
     let ari = adjusted_rand_index(&auto.labels, &given.labels);
     let (fit_auto, fit_given) = (fit(&poses, &auto), fit(&poses, &given));
