@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use crate::config::{PartBorders, SimplifyConfig};
 use crate::face_lists::FaceLists;
-use crate::quadric::Quadric;
+use crate::quadric::{FacePlane, Quadric};
 
 /// Vertex flags, one byte per slot: the slot holds a vertex with faces.
 pub(crate) const ALIVE: u8 = 1;
@@ -31,13 +31,13 @@ pub(crate) struct InputNormal {
     pub(crate) length: f64,
 }
 
-/// The plane quadric of every face of one pose (area-weighted), in face order.
-pub(crate) fn fill_face_quadrics(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<Quadric> {
+/// The plane of every face of one pose (whose quadric is the face's), in face order.
+pub(crate) fn fill_face_planes(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<FacePlane> {
     faces
         .par_iter()
         .map(|f| {
             let [a, b, c] = f.map(|v| positions[v as usize]);
-            Quadric::from_triangle(&a, &b, &c)
+            FacePlane::of_triangle(&a, &b, &c)
         })
         .collect()
 }
@@ -73,40 +73,35 @@ pub(crate) struct ClassifyInput<'a> {
     pub(crate) lists: &'a FaceLists,
     /// Local positions, `[pose][vertex]`.
     pub(crate) poses: &'a [Vec<Vec3>],
-    /// The plane quadric of every face, when there is one pose (several poses: each
-    /// face's plane is computed where it is summed, per pose).
-    pub(crate) face_quadrics: Option<&'a [Quadric]>,
+    /// The plane of every face, when there is one pose (several poses: each face's
+    /// plane is computed where it is summed, per pose).
+    pub(crate) face_planes: Option<&'a [FacePlane]>,
     pub(crate) part_labels: Option<&'a [u32]>,
     pub(crate) config: &'a SimplifyConfig,
 }
 
 /// Flags of every vertex, and its quadrics `[slot * pose_count + pose]`, in one
-/// parallel pass (chunks collected in order).
+/// parallel pass writing in place (no per-chunk copies: on a million faces those
+/// would be the run's peak memory).
 pub(crate) fn classify_vertices(input: &ClassifyInput<'_>) -> (Vec<u8>, Vec<Quadric>) {
     let n = input.lists.slot_count();
     let pose_count = input.poses.len();
-    let chunks: Vec<(Vec<u8>, Vec<Quadric>)> = (0..n.div_ceil(CHUNK))
-        .into_par_iter()
-        .map(|chunk| {
-            let mut flags = Vec::with_capacity(CHUNK);
-            let mut quadrics = Vec::with_capacity(CHUNK * pose_count);
+    let mut flags = vec![0u8; n];
+    let mut quadrics = vec![Quadric::default(); n * pose_count];
+    flags.par_chunks_mut(CHUNK).zip(quadrics.par_chunks_mut(CHUNK * pose_count)).enumerate().for_each(
+        |(chunk, (flags, quadrics))| {
             let mut link = Link::default();
-            for v in (chunk * CHUNK)..((chunk + 1) * CHUNK).min(n) {
-                let v = v as u32;
+            for (i, (vertex_flags, vertex_quadrics)) in
+                flags.iter_mut().zip(quadrics.chunks_exact_mut(pose_count)).enumerate()
+            {
+                let v = (chunk * CHUNK + i) as u32;
                 link.gather(input.lists, v);
-                let (vertex_flags, constraints) = classify_vertex(input, &link, v);
-                flags.push(vertex_flags);
-                fill_vertex_quadrics(input, &link, v, &constraints, &mut quadrics);
+                let constraints;
+                (*vertex_flags, constraints) = classify_vertex(input, &link, v);
+                fill_vertex_quadrics(input, &link, v, &constraints, vertex_quadrics);
             }
-            (flags, quadrics)
-        })
-        .collect();
-    let mut flags = Vec::with_capacity(n);
-    let mut quadrics = Vec::with_capacity(n * pose_count);
-    for (f, q) in chunks {
-        flags.extend(f);
-        quadrics.extend(q);
-    }
+        },
+    );
     (flags, quadrics)
 }
 
@@ -146,14 +141,14 @@ fn classify_vertex(input: &ClassifyInput<'_>, link: &Link, v: u32) -> (u8, Const
     (flags, Constraints { boundary, part_border })
 }
 
-/// Appends vertex `v`'s quadric in every pose to `out`: the planes of its faces and the
-/// constraint planes of its boundary and part-border edges.
+/// Vertex `v`'s quadric in every pose, into `out` (one per pose): the planes of its
+/// faces and the constraint planes of its boundary and part-border edges.
 fn fill_vertex_quadrics(
     input: &ClassifyInput<'_>,
     link: &Link,
     v: u32,
     constraints: &Constraints,
-    out: &mut Vec<Quadric>,
+    out: &mut [Quadric],
 ) {
     let label_of = |x: u32| input.part_labels.map(|l| l[x as usize]);
     let my_faces = input.lists.of(v);
@@ -163,8 +158,8 @@ fn fill_vertex_quadrics(
         for &f in my_faces {
             let face = input.lists.face(f);
             let [p0, p1, p2] = face.map(|x| positions[x as usize]);
-            match input.face_quadrics {
-                Some(fq) if pose == 0 => q += &fq[f as usize],
+            match input.face_planes {
+                Some(planes) if pose == 0 => q += &planes[f as usize].quadric(),
                 _ => q += &Quadric::from_triangle(&p0, &p1, &p2),
             }
             if constraints.boundary.is_none() && constraints.part_border.is_none() {
@@ -185,7 +180,7 @@ fn fill_vertex_quadrics(
                 }
             }
         }
-        out.push(q);
+        out[pose] = q;
     }
 }
 

@@ -36,7 +36,7 @@ use rayon::prelude::*;
 
 use crate::classify::{
     ALIVE, BOUNDARY, CHUNK, ClassifyInput, FROZEN, InputNormal, PINNED, classify_vertices,
-    compute_input_normals, compute_vertex_normals, fill_face_quadrics,
+    compute_input_normals, compute_vertex_normals, fill_face_planes,
 };
 use crate::config::{Metric, Placement, SimplifyConfig, Target};
 use crate::error::SimplifyError;
@@ -93,23 +93,18 @@ pub(crate) fn run_engine(
     // followed by an exhaustive one, which tries every edge in cost order; when that
     // achieves nothing either, no valid collapse is left.
     let mut pass = Pass::Batched;
-    // Costs of the previous pass: an edge whose endpoints did not change since keeps its
-    // cost (the quadric cost depends on the endpoints alone), so only edges around the
-    // last pass's collapses are costed again.
+    // Edges and costs of the previous pass: a slot whose neighbours did not change
+    // since keeps its edges, an edge whose endpoints did not change keeps its quadric
+    // cost (Lindstrom–Turk's reads the faces around the edge: it is always recomputed).
     let mut previous = EdgeCosts::default();
     while !target.reached(&engine) {
         engine.pass += 1;
-        let edges = engine.pick_edge_collapses();
-        let costs = engine.rank_edge_collapses(&edges, &previous);
-        let order = sort_edge_collapses(&costs, target.remaining(&engine), pass);
+        let ranked = engine.pick_and_rank_edge_collapses(std::mem::take(&mut previous));
+        let order = sort_edge_collapses(&ranked, target.remaining(&engine), pass);
         let before = engine.collapses;
-        engine.perform_edge_collapses(&edges, &order, &target, pass, &mut marks);
+        engine.perform_edge_collapses(&order, &target, pass, &mut marks);
         progress.advance((engine.collapses - before) as u64);
-        // Lindstrom–Turk's cost reads the faces around the edge, which change with any
-        // neighbour's collapse: nothing carries over.
-        if engine.params.metric == Metric::Quadric {
-            previous = EdgeCosts { edges, costs };
-        }
+        previous = ranked;
         pass = match (engine.collapses > before, pass) {
             (true, _) => Pass::Batched,
             (false, Pass::Batched) => Pass::Exhaustive,
@@ -175,11 +170,31 @@ pub(crate) struct Candidate {
 }
 
 /// The live edges of one pass, `[lo, hi]` ascending, and the cost of each (infinite
-/// when the edge may not collapse).
+/// when the edge may not collapse), kept in the chunks of slots that listed them: one
+/// pass over the edges fewer, and no second copy at the pass's peak memory.
 #[derive(Debug, Default)]
 struct EdgeCosts {
+    chunks: Vec<ChunkEdges>,
+}
+
+/// The edges whose `lo` is one of `CHUNK` consecutive slots.
+#[derive(Debug, Default)]
+struct ChunkEdges {
     edges: Vec<[u32; 2]>,
     costs: Vec<f64>,
+    /// `start[i]` indexes the first edge of the chunk's `i`-th slot.
+    start: Vec<u32>,
+}
+
+impl EdgeCosts {
+    /// The edges and costs of slot `v` (empty before the first pass).
+    fn of(&self, v: u32) -> (&[[u32; 2]], &[f64]) {
+        let Some(chunk) = self.chunks.get(v as usize / CHUNK) else { return (&[], &[]) };
+        let i = v as usize % CHUNK;
+        let end = chunk.start.get(i + 1).map_or(chunk.edges.len(), |&e| e as usize);
+        let run = chunk.start[i] as usize..end;
+        (&chunk.edges[run.clone()], &chunk.costs[run])
+    }
 }
 
 /// Settings the inner loop reads, derived once from the config.
@@ -221,6 +236,9 @@ pub(crate) struct Engine {
     /// surface orientation where a slot's vertex came from, whatever faces it has now.
     pub(crate) vertex_normals: Vec<Vec3>,
     pub(crate) flags: Vec<u8>,
+    /// The pass in which each slot's set of neighbours last changed (0: never): its
+    /// edges listed by earlier passes are stale.
+    touched_in_pass: Vec<u32>,
     /// Slots changed in the current pass (`== pass`): their edges wait for the next.
     changed_in_pass: Vec<u32>,
     /// The pass in which each slot's quadric, position, weight or flags last changed
@@ -257,13 +275,13 @@ impl Engine {
         let lists = FaceLists::new(n, faces);
         // Each face's plane quadric once (a vertex sums those of its faces). Several
         // poses would need one per face and pose: those are computed where summed.
-        let face_quadrics = (pose_count == 1).then(|| fill_face_quadrics(lists.faces(), &local[0]));
+        let face_planes = (pose_count == 1).then(|| fill_face_planes(lists.faces(), &local[0]));
         let input_normals = compute_input_normals(lists.faces(), &mesh.positions);
         let vertex_normals = compute_vertex_normals(&lists, &input_normals);
         let (flags, quadrics) = classify_vertices(&ClassifyInput {
             lists: &lists,
             poses: &local,
-            face_quadrics: face_quadrics.as_deref(),
+            face_planes: face_planes.as_deref(),
             part_labels,
             config,
         });
@@ -302,6 +320,7 @@ impl Engine {
             input_normals,
             vertex_normals,
             flags,
+            touched_in_pass: vec![0; n],
             changed_in_pass: vec![0; n],
             modified_in_pass: vec![0; n],
             pass: 0,
@@ -315,65 +334,82 @@ impl Engine {
         }
     }
 
-    /// Pass, step 1: every live edge once, as `[lo, hi]`, ascending.
-    fn pick_edge_collapses(&self) -> Vec<[u32; 2]> {
+    /// Pass, steps 1 and 2 (meshoptimizer's pick and rank) in one parallel sweep over
+    /// the slots: every live edge once, as `[lo, hi]` ascending, and its cost. A slot
+    /// whose neighbours did not change in the last pass copies its edges from
+    /// `previous`; an edge neither of whose endpoints changed copies its cost (the
+    /// quadric cost depends on the endpoints alone), so only the edges around the last
+    /// pass's collapses are listed and costed again.
+    fn pick_and_rank_edge_collapses(&self, previous: EdgeCosts) -> EdgeCosts {
         let n = self.positions.len();
-        let chunks: Vec<Vec<[u32; 2]>> = (0..n.div_ceil(CHUNK))
+        // Changes made in the last pass are not in `previous`; earlier ones are.
+        let last = self.pass - 1;
+        let have_previous = !previous.chunks.is_empty();
+        let reuse_costs = have_previous && self.params.metric == Metric::Quadric;
+        let unchanged = |a: u32, b: u32| {
+            self.modified_in_pass[a as usize] < last && self.modified_in_pass[b as usize] < last
+        };
+        let chunks = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map(|chunk| {
-                let mut edges = Vec::with_capacity(3 * CHUNK);
+                let slots = (chunk * CHUNK) as u32..((chunk + 1) * CHUNK).min(n) as u32;
+                let capacity = previous.chunks.get(chunk).map_or(3 * slots.len(), |c| c.edges.len());
+                let mut out = ChunkEdges {
+                    edges: Vec::with_capacity(capacity),
+                    costs: Vec::with_capacity(capacity),
+                    start: Vec::with_capacity(slots.len()),
+                };
                 let mut upper: Vec<u32> = Vec::with_capacity(16);
-                for v in (chunk * CHUNK) as u32..((chunk + 1) * CHUNK).min(n) as u32 {
+                for v in slots {
+                    out.start.push(out.edges.len() as u32);
                     if self.flags[v as usize] & (ALIVE | FROZEN) != ALIVE {
                         continue;
                     }
-                    // A vertex has few neighbours: insertion into a sorted run beats
-                    // collecting, sorting and deduplicating.
-                    upper.clear();
-                    for &f in self.lists.of(v) {
-                        for x in self.lists.face(f) {
-                            if x > v
-                                && let Err(at) = upper.binary_search(&x)
-                            {
-                                upper.insert(at, x);
-                            }
+                    let (old_edges, old_costs) = previous.of(v);
+                    if have_previous && self.touched_in_pass[v as usize] < last {
+                        debug_assert!(
+                            self.upper_neighbours(v, &mut upper).iter().eq(old_edges.iter().map(|e| &e[1]))
+                        );
+                        for (&[_, x], &cost) in old_edges.iter().zip(old_costs) {
+                            out.edges.push([v, x]);
+                            out.costs.push(if reuse_costs && unchanged(v, x) {
+                                cost
+                            } else {
+                                self.cost_of(v, x)
+                            });
                         }
+                        continue;
                     }
-                    edges.extend(upper.iter().map(|&x| [v, x]));
+                    for &x in self.upper_neighbours(v, &mut upper).iter() {
+                        let reused = match old_edges.binary_search(&[v, x]) {
+                            Ok(j) if reuse_costs && unchanged(v, x) => Some(old_costs[j]),
+                            _ => None,
+                        };
+                        out.edges.push([v, x]);
+                        out.costs.push(reused.unwrap_or_else(|| self.cost_of(v, x)));
+                    }
                 }
-                edges
+                out
             })
             .collect();
-        chunks.concat()
+        EdgeCosts { chunks }
     }
 
-    /// Pass, step 2: the cost of every edge (in parallel, order kept): taken from
-    /// `previous` when neither endpoint changed in the last pass, evaluated otherwise.
-    fn rank_edge_collapses(&self, edges: &[[u32; 2]], previous: &EdgeCosts) -> Vec<f64> {
-        let stale = self.pass - 1;
-        let chunks: Vec<Vec<f64>> = edges
-            .par_chunks(CHUNK)
-            .map(|chunk| {
-                // Both lists ascend: walk `previous` alongside from the chunk's first edge.
-                let mut j = previous.edges.partition_point(|e| *e < chunk[0]);
-                chunk
-                    .iter()
-                    .map(|&[a, b]| {
-                        while j < previous.edges.len() && previous.edges[j] < [a, b] {
-                            j += 1;
-                        }
-                        let unchanged = self.modified_in_pass[a as usize] < stale
-                            && self.modified_in_pass[b as usize] < stale;
-                        if unchanged && previous.edges.get(j) == Some(&[a, b]) {
-                            previous.costs[j]
-                        } else {
-                            self.cost_of(a, b)
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
-        chunks.concat()
+    /// The neighbours of `v` with a higher index, ascending, in `upper`. A vertex has
+    /// few neighbours: insertion into a sorted run beats collecting, sorting and
+    /// deduplicating.
+    fn upper_neighbours<'a>(&self, v: u32, upper: &'a mut Vec<u32>) -> &'a [u32] {
+        upper.clear();
+        for &f in self.lists.of(v) {
+            for x in self.lists.face(f) {
+                if x > v
+                    && let Err(at) = upper.binary_search(&x)
+                {
+                    upper.insert(at, x);
+                }
+            }
+        }
+        upper
     }
 
     /// Pass, step 4: perform the sorted collapses. A batched pass chooses, in cost
@@ -388,8 +424,7 @@ impl Engine {
     /// changes.
     fn perform_edge_collapses(
         &mut self,
-        edges: &[[u32; 2]],
-        order: &[u32],
+        order: &[[u32; 2]],
         target: &StopAt,
         pass: Pass,
         marks: &mut ScratchMarks,
@@ -398,34 +433,31 @@ impl Engine {
             Pass::Batched => {
                 let wanted = target.remaining(self).max(1);
                 let mut chosen = Vec::with_capacity(wanted.min(order.len()));
-                for &i in order {
+                for &[a, b] in order {
                     if chosen.len() == wanted {
                         break;
                     }
-                    let [a, b] = edges[i as usize];
                     if self.changed_this_pass(a) || self.changed_this_pass(b) {
                         continue;
                     }
                     self.changed_in_pass[a as usize] = self.pass;
                     self.changed_in_pass[b as usize] = self.pass;
-                    chosen.push(i);
+                    chosen.push([a, b]);
                 }
-                // Edge indices ascend with (lo, hi): vertex order.
+                // `(lo, hi)` order: vertex order.
                 chosen.sort_unstable();
-                for i in chosen {
+                for [a, b] in chosen {
                     if target.reached(self) {
                         break;
                     }
-                    let [a, b] = edges[i as usize];
                     self.try_collapse(a, b, marks);
                 }
             }
             Pass::Exhaustive => {
-                for &i in order {
+                for &[a, b] in order {
                     if target.reached(self) {
                         break;
                     }
-                    let [a, b] = edges[i as usize];
                     if self.changed_this_pass(a) || self.changed_this_pass(b) {
                         continue;
                     }
@@ -617,6 +649,12 @@ impl Engine {
     /// are re-pointed to `keep`, the quadrics add up and `keep` moves.
     fn collapse_edge(&mut self, c: &Candidate) {
         let (r, k) = (c.remove, c.keep);
+        // Every vertex around `remove` gains `keep` or loses `remove` as a neighbour.
+        for &f in self.lists.of(r) {
+            for x in self.lists.face(f) {
+                self.touched_in_pass[x as usize] = self.pass;
+            }
+        }
         self.lists.collapse(r, k);
         let pc = self.pose_count;
         for p in 0..pc {
@@ -686,27 +724,34 @@ impl Engine {
     }
 }
 
-/// Pass, step 3: the indices into the pass's edges of those it may perform, cheapest
-/// first (ties by edge, i.e. `(lo, hi)`). A batched pass keeps only costs up to
-/// `PASS_ERROR_FACTOR` times the cost of the `needed`-th cheapest (capped by
-/// `PASS_GOAL_FRACTION`); an exhaustive one keeps every finite cost.
-fn sort_edge_collapses(costs: &[f64], needed: usize, pass: Pass) -> Vec<u32> {
+/// Pass, step 3: the edges this pass may perform, cheapest first (ties by `(lo, hi)`).
+/// A batched pass keeps only costs up to `PASS_ERROR_FACTOR` times the cost of the
+/// `needed`-th cheapest (capped by `PASS_GOAL_FRACTION`); an exhaustive one keeps every
+/// finite cost.
+fn sort_edge_collapses(ranked: &EdgeCosts, needed: usize, pass: Pass) -> Vec<[u32; 2]> {
+    let count = ranked.chunks.iter().map(|c| c.costs.len()).sum::<usize>();
     let mut limit = f64::INFINITY;
-    if pass == Pass::Batched && !costs.is_empty() {
-        let goal = ((needed as f64 * PASS_GOAL_FRACTION).ceil() as usize).clamp(1, costs.len());
-        let mut scratch = costs.to_vec();
+    if pass == Pass::Batched && count > 0 {
+        let goal = ((needed as f64 * PASS_GOAL_FRACTION).ceil() as usize).clamp(1, count);
+        let mut scratch = Vec::with_capacity(count);
+        for c in &ranked.chunks {
+            scratch.extend_from_slice(&c.costs);
+        }
         let (_, nth, _) = scratch.select_nth_unstable_by(goal - 1, f64::total_cmp);
         limit = *nth * PASS_ERROR_FACTOR;
     }
-    // Non-negative finite f64 bit patterns order like the values.
-    let mut order: Vec<(u64, u32)> = costs
-        .iter()
-        .enumerate()
-        .filter(|&(_, &c)| c.is_finite() && c <= limit)
-        .map(|(i, c)| (c.to_bits(), i as u32))
-        .collect();
+    // Non-negative finite f64 bit patterns order like the values; `(lo, hi)` packed
+    // into a u64 orders like the pair.
+    let mut order: Vec<(u64, u64)> = Vec::new();
+    for c in &ranked.chunks {
+        for (&cost, &[lo, hi]) in c.costs.iter().zip(&c.edges) {
+            if cost.is_finite() && cost <= limit {
+                order.push((cost.to_bits(), (u64::from(lo) << 32) | u64::from(hi)));
+            }
+        }
+    }
     order.sort_unstable();
-    order.into_iter().map(|(_, i)| i).collect()
+    order.into_iter().map(|(_, e)| [(e >> 32) as u32, e as u32]).collect()
 }
 
 /// Which endpoints of an edge are pinned (never both: such an edge is not evaluated).
