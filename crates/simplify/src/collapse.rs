@@ -186,14 +186,12 @@ struct ChunkEdges {
     start: Vec<u32>,
 }
 
-impl EdgeCosts {
-    /// The edges and costs of slot `v` (empty before the first pass).
-    fn of(&self, v: u32) -> (&[[u32; 2]], &[f64]) {
-        let Some(chunk) = self.chunks.get(v as usize / CHUNK) else { return (&[], &[]) };
-        let i = v as usize % CHUNK;
-        let end = chunk.start.get(i + 1).map_or(chunk.edges.len(), |&e| e as usize);
-        let run = chunk.start[i] as usize..end;
-        (&chunk.edges[run.clone()], &chunk.costs[run])
+impl ChunkEdges {
+    /// The edges and costs of the chunk's `i`-th slot (empty before the first pass).
+    fn of(&self, i: usize) -> (&[[u32; 2]], &[f64]) {
+        let Some(&start) = self.start.get(i) else { return (&[], &[]) };
+        let end = self.start.get(i + 1).map_or(self.edges.len(), |&e| e as usize);
+        (&self.edges[start as usize..end], &self.costs[start as usize..end])
     }
 }
 
@@ -349,11 +347,16 @@ impl Engine {
         let unchanged = |a: u32, b: u32| {
             self.modified_in_pass[a as usize] < last && self.modified_in_pass[b as usize] < last
         };
-        let chunks = (0..n.div_ceil(CHUNK))
+        // Each work item consumes its own chunk of `previous` (a slot's old edges are in
+        // its own chunk), so the two passes' lists are never whole in memory together.
+        let mut old_chunks = previous.chunks;
+        old_chunks.resize_with(n.div_ceil(CHUNK), ChunkEdges::default);
+        let chunks = old_chunks
             .into_par_iter()
-            .map(|chunk| {
+            .enumerate()
+            .map(|(chunk, old)| {
                 let slots = (chunk * CHUNK) as u32..((chunk + 1) * CHUNK).min(n) as u32;
-                let capacity = previous.chunks.get(chunk).map_or(3 * slots.len(), |c| c.edges.len());
+                let capacity = if have_previous { old.edges.len() } else { 3 * slots.len() };
                 let mut out = ChunkEdges {
                     edges: Vec::with_capacity(capacity),
                     costs: Vec::with_capacity(capacity),
@@ -365,7 +368,7 @@ impl Engine {
                     if self.flags[v as usize] & (ALIVE | FROZEN) != ALIVE {
                         continue;
                     }
-                    let (old_edges, old_costs) = previous.of(v);
+                    let (old_edges, old_costs) = old.of(v as usize - chunk * CHUNK);
                     if have_previous && self.touched_in_pass[v as usize] < last {
                         debug_assert!(
                             self.upper_neighbours(v, &mut upper).iter().eq(old_edges.iter().map(|e| &e[1]))
