@@ -8,7 +8,8 @@
 //! edges, rank them by cost in parallel (an edge with no endpoint changed by the last
 //! pass keeps its cost: the quadric cost depends on the endpoints alone), sort the cheap
 //! ones, choose in cost order those that share no endpoint, and perform them, each
-//! re-checked against the safeguards (`safeguards.rs`: link condition, fold-over against
+//! evaluated again on the current mesh (`placement.rs`) and re-checked against the
+//! safeguards (`safeguards.rs`: link condition, fold-over against
 //! the face itself and against its corners' input normals, degeneracy); finally compact
 //! the survivors into the output mesh. The phase names are meshoptimizer's
 //! (`pickEdgeCollapses`, `rankEdgeCollapses`, `sortEdgeCollapses`,
@@ -41,7 +42,6 @@ use crate::classify::{
 use crate::config::{Metric, Placement, SimplifyConfig, Target};
 use crate::error::SimplifyError;
 use crate::face_lists::FaceLists;
-use crate::lindstrom_turk::Neighbourhood;
 use crate::marks::ScratchMarks;
 use crate::quadric::Quadric;
 use crate::report::{Refusals, SimplifyReport, StopReason, edge_length_stats};
@@ -56,10 +56,6 @@ const PASS_ERROR_FACTOR: f64 = 1.5;
 /// A pass never aims at more than this fraction of the collapses still needed, so that
 /// early passes (when almost everything is cheap) do not flatten the greedy order.
 const PASS_GOAL_FRACTION: f64 = 0.5;
-
-/// Relative margin by which a computed placement must beat the better endpoint's error
-/// to be used instead of it (rounding noise must not move a vertex off its position).
-const SNAP_TOLERANCE: f64 = 1e-9;
 
 /// Marks a slot whose position is no longer any input vertex's (optimal placement).
 const MOVED: u32 = u32::MAX;
@@ -198,33 +194,33 @@ impl ChunkEdges {
 /// Settings the inner loop reads, derived once from the config.
 #[derive(Debug)]
 pub(crate) struct Params {
-    placement: Placement,
+    pub(crate) placement: Placement,
     /// [`Metric::Quadric`] whenever there are several poses.
-    metric: Metric,
-    balance: bool,
+    pub(crate) metric: Metric,
+    pub(crate) balance: bool,
     pub(crate) cos_max_rotation: f64,
     /// `-inf` when the corner-normal guard is off (180°).
     pub(crate) cos_max_corner_normal: f64,
-    max_placement_distance: f64,
+    pub(crate) max_placement_distance: f64,
 }
 
 /// All mutable state of one simplification (see the module doc for the layout).
 #[derive(Debug)]
 pub(crate) struct Engine {
     pub(crate) params: Params,
-    pose_count: usize,
+    pub(crate) pose_count: usize,
     /// Subtracted from every input position for precision; added back on output.
     center: Vec3,
     /// Current template positions, local coordinates, by slot.
     pub(crate) positions: Vec<Vec3>,
     /// Multi-pose only: local positions of every pose, `[pose][slot]` (never move).
-    pose_positions: Vec<Vec<Vec3>>,
+    pub(crate) pose_positions: Vec<Vec<Vec3>>,
     /// `quadrics[slot * pose_count + pose]`.
-    quadrics: Vec<Quadric>,
+    pub(crate) quadrics: Vec<Quadric>,
     /// Saliency weight per slot, when the saliency factor is on. A merged vertex takes
     /// the larger weight of the two, so salient detail is never diluted by absorbing a
     /// cheap neighbour.
-    weights: Option<Vec<f64>>,
+    pub(crate) weights: Option<Vec<f64>>,
     pub(crate) lists: FaceLists,
     /// Unnormalised normal of every input face in the template and its length: a
     /// collapse may not turn a face past the threshold from it either, since small
@@ -490,164 +486,6 @@ impl Engine {
         true
     }
 
-    /// Placement and cost of collapsing edge `(a, b)`; `None` when the edge may not
-    /// collapse at all (a frozen endpoint, both pinned, or a non-finite cost).
-    fn evaluate(&self, a: u32, b: u32) -> Option<Candidate> {
-        let (fa, fb) = (self.flags[a as usize], self.flags[b as usize]);
-        if (fa | fb) & FROZEN != 0 || (fa & fb) & PINNED != 0 {
-            return None;
-        }
-        let pinned = Pinned { a: fa & PINNED != 0, b: fb & PINNED != 0 };
-        let (pa, pb) = (&self.positions[a as usize], &self.positions[b as usize]);
-        let (candidate, error) = match self.params.metric {
-            Metric::LindstromTurk => self.evaluate_lindstrom_turk(a, b, pinned),
-            Metric::Quadric => {
-                let c = match (self.params.placement, pinned.any()) {
-                    (Placement::Subset, _) => self.place_on_endpoint(a, b, pinned),
-                    (Placement::Optimal, true) => {
-                        let keep = pinned.endpoint(a, b, |_| 0.0);
-                        self.candidate_at(a, b, self.positions[keep as usize], keep)
-                    }
-                    (Placement::Optimal, false) => self.place_optimally(a, b),
-                };
-                (c, c.error)
-            }
-        };
-        let cost = self.cost_factors(a, b, error, pa, pb);
-        cost.is_finite().then_some(Candidate { cost, ..candidate })
-    }
-
-    /// `error` times the enabled factors of Eq. 5: edge length, mean saliency weight.
-    #[inline]
-    fn cost_factors(&self, a: u32, b: u32, error: f64, pa: &Vec3, pb: &Vec3) -> f64 {
-        let mut cost = error;
-        if self.params.balance {
-            cost *= (pa - pb).norm();
-        }
-        if let Some(w) = &self.weights {
-            cost *= 0.5 * (w[a as usize] + w[b as usize]);
-        }
-        cost
-    }
-
-    /// [`Self::evaluate`] with Lindstrom–Turk's cost: the placement of
-    /// [`Neighbourhood::placement`] (or the cheaper endpoint: for subset placement, for a
-    /// pinned endpoint, or when that placement is undefined or flies farther than
-    /// `max_placement_distance`), costed from the current faces around the edge. The
-    /// candidate's `error` stays the merged quadric's, for the report; the returned
-    /// error is Lindstrom–Turk's, for the ranking.
-    fn evaluate_lindstrom_turk(&self, a: u32, b: u32, pinned: Pinned) -> (Candidate, f64) {
-        let pa = self.positions[a as usize];
-        let pb = self.positions[b as usize];
-        let squared_length = (pa - pb).norm_squared();
-        let n = Neighbourhood::gather(a, b, &self.lists, &self.positions, &self.flags);
-        let computed = if self.params.placement == Placement::Subset || pinned.any() {
-            None
-        } else {
-            let mid = (pa + pb) * 0.5;
-            let reach = self.params.max_placement_distance * squared_length.sqrt();
-            n.placement(squared_length, || Neighbourhood::link_positions(a, b, &self.lists, &self.positions))
-                .filter(|p| (p - mid).norm() <= reach)
-        };
-        let (position, keep) = match computed {
-            Some(p) => (p, nearer_endpoint(a, b, &pa, &pb, &p)),
-            None => {
-                let keep = pinned.endpoint(a, b, |k| n.cost(&self.positions[k as usize], squared_length));
-                (self.positions[keep as usize], keep)
-            }
-        };
-        (self.candidate_at(a, b, position, keep), n.cost(&position, squared_length))
-    }
-
-    /// Subset placement: keep whichever endpoint has the smaller merged error (the lower
-    /// index on a tie); a pinned endpoint is always the one kept.
-    fn place_on_endpoint(&self, a: u32, b: u32, pinned: Pinned) -> Candidate {
-        let keep = pinned.endpoint(a, b, |k| self.subset_error(a, b, k));
-        let remove = if keep == a { b } else { a };
-        Candidate {
-            remove,
-            keep,
-            position: self.positions[keep as usize],
-            error: self.subset_error(a, b, keep),
-            cost: 0.0,
-        }
-    }
-
-    /// Merged error of `(a, b)` when `keep` stays where it is, summed over poses.
-    #[inline]
-    fn subset_error(&self, a: u32, b: u32, keep: u32) -> f64 {
-        let pc = self.pose_count;
-        let (a, b, k) = (a as usize, b as usize, keep as usize);
-        let mut error = 0.0;
-        for p in 0..pc {
-            let q = self.quadrics[a * pc + p] + self.quadrics[b * pc + p];
-            let x = if pc == 1 { &self.positions[k] } else { &self.pose_positions[p][k] };
-            error += q.eval(x);
-        }
-        error.max(0.0)
-    }
-
-    /// Optimal placement (single pose): the quadric's minimiser if well-conditioned and
-    /// near the edge, else the best point of the segment, else the better endpoint.
-    fn place_optimally(&self, a: u32, b: u32) -> Candidate {
-        let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
-        let (position, error) = self.optimal_position(a, b);
-        let keep = nearer_endpoint(a, b, &pa, &pb, &position);
-        let remove = if keep == a { b } else { a };
-        Candidate { remove, keep, position, error, cost: 0.0 }
-    }
-
-    /// The optimal placement of `(a, b)` (see [`Self::place_optimally`]) and the merged
-    /// quadric's error there: all that ranking needs.
-    #[inline]
-    fn optimal_position(&self, a: u32, b: u32) -> (Vec3, f64) {
-        let q = self.quadrics[a as usize] + self.quadrics[b as usize];
-        let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
-        let (error_a, error_b) = (q.eval(&pa), q.eval(&pb));
-        let (endpoint, endpoint_error) = if error_b < error_a { (pb, error_b) } else { (pa, error_a) };
-        let mid = (pa + pb) * 0.5;
-        let reach = self.params.max_placement_distance * (pa - pb).norm();
-        let computed = match q.minimiser() {
-            Some(p) if (p - mid).norm() <= reach => Some(p),
-            _ => q.minimiser_on_segment(&pa, &pb),
-        };
-        // An endpoint as good as the computed point up to rounding is preferred: the
-        // vertex then keeps its exact input position (and `simp_to_orig` entry).
-        if let Some(p) = computed {
-            let error = q.eval(&p).max(0.0);
-            if endpoint_error > error * (1.0 + SNAP_TOLERANCE) {
-                return (p, error);
-            }
-        }
-        (endpoint, endpoint_error.max(0.0))
-    }
-
-    /// The cost of collapsing `(a, b)`, infinite when it may not collapse: what
-    /// [`Self::evaluate`] gives, without choosing the slot kept (the common case, an
-    /// optimal quadric placement with neither endpoint pinned, has a short path).
-    #[inline]
-    fn cost_of(&self, a: u32, b: u32) -> f64 {
-        let full = || self.evaluate(a, b).map_or(f64::INFINITY, |c| c.cost);
-        let (fa, fb) = (self.flags[a as usize], self.flags[b as usize]);
-        if self.params.placement == Placement::Subset
-            || self.params.metric == Metric::LindstromTurk
-            || (fa | fb) & (FROZEN | PINNED) != 0
-        {
-            return full();
-        }
-        let (pa, pb) = (&self.positions[a as usize], &self.positions[b as usize]);
-        let cost = self.cost_factors(a, b, self.optimal_position(a, b).1, pa, pb);
-        let cost = if cost.is_finite() { cost } else { f64::INFINITY };
-        debug_assert_eq!(cost.to_bits(), full().to_bits(), "fast and full cost of edge ({a}, {b}) differ");
-        cost
-    }
-
-    fn candidate_at(&self, a: u32, b: u32, position: Vec3, keep: u32) -> Candidate {
-        let remove = if keep == a { b } else { a };
-        let q = self.quadrics[a as usize] + self.quadrics[b as usize];
-        Candidate { remove, keep, position, error: q.eval(&position).max(0.0), cost: 0.0 }
-    }
-
     /// Performs a checked collapse: the faces on the edge die, `remove`'s other faces
     /// are re-pointed to `keep`, the quadrics add up and `keep` moves.
     fn collapse_edge(&mut self, c: &Candidate) {
@@ -755,41 +593,4 @@ fn sort_edge_collapses(ranked: &EdgeCosts, needed: usize, pass: Pass) -> Vec<[u3
     }
     order.sort_unstable();
     order.into_iter().map(|(_, e)| [(e >> 32) as u32, e as u32]).collect()
-}
-
-/// Which endpoints of an edge are pinned (never both: such an edge is not evaluated).
-#[derive(Debug, Clone, Copy)]
-struct Pinned {
-    a: bool,
-    b: bool,
-}
-
-impl Pinned {
-    fn any(self) -> bool {
-        self.a || self.b
-    }
-
-    /// The endpoint a collapse onto an endpoint keeps: the pinned one, else the one with
-    /// the smaller `error_keeping` (the lower index on a tie).
-    #[inline]
-    fn endpoint(self, a: u32, b: u32, error_keeping: impl Fn(u32) -> f64) -> u32 {
-        let (lo, hi) = if a < b { (a, b) } else { (b, a) };
-        if self.a {
-            a
-        } else if self.b {
-            b
-        } else if error_keeping(hi) < error_keeping(lo) {
-            hi
-        } else {
-            lo
-        }
-    }
-}
-
-/// The slot a moved vertex keeps: the endpoint nearer its new position (the lower index
-/// on a tie), so a vertex that did not move keeps its identity.
-#[inline]
-fn nearer_endpoint(a: u32, b: u32, pa: &Vec3, pb: &Vec3, position: &Vec3) -> u32 {
-    let (da, db) = ((position - pa).norm_squared(), (position - pb).norm_squared());
-    if da < db || (da == db && a < b) { a } else { b }
 }

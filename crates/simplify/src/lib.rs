@@ -20,6 +20,7 @@ mod error;
 mod face_lists;
 mod lindstrom_turk;
 mod marks;
+mod placement;
 pub mod quadric;
 mod report;
 mod safeguards;
