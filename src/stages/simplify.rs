@@ -249,6 +249,8 @@ pub struct SimplifySummary {
     pub stop: StopReason,
     pub refused_topology: usize,
     pub refused_flip: usize,
+    /// Refused by the fold guard (`max_corner_normal_deg`), counted apart from flips.
+    pub refused_fold: usize,
     pub refused_degenerate: usize,
     pub locked_vertices: usize,
     pub max_error: f64,
@@ -309,6 +311,7 @@ fn output(
         stop: r.stop,
         refused_topology: r.refusals.topology,
         refused_flip: r.refusals.flip,
+        refused_fold: r.refusals.fold,
         refused_degenerate: r.refusals.degenerate,
         locked_vertices: r.locked_vertices,
         max_error: r.max_error,

@@ -12,18 +12,26 @@
 //! non-manifold input vertices) are always on; a target they prevent is reported in
 //! [`SimplifyReport::stop`], not raised as an error.
 
+mod api;
+mod classify;
 mod collapse;
 mod config;
 mod error;
+mod face_lists;
 mod lindstrom_turk;
+mod marks;
 mod names;
+mod placement;
 pub mod quadric;
 mod report;
+mod safeguards;
+mod types;
 
-pub use collapse::{Simplified, SimplifyInput, simplify, simplify_multipose, simplify_with_progress};
+pub use api::{simplify, simplify_multipose, simplify_with_progress};
 pub use config::{Metric, PartBorders, Placement, SimplifyConfig, Target};
 pub use error::SimplifyError;
 pub use report::{Refusals, SimplifyReport, StopReason};
+pub use types::{Simplified, SimplifyInput};
 
 /// Version of this stage's output. The driver's cache key carries it, so bump it in the
 /// same commit as any change that alters the output for the same input and

@@ -14,6 +14,8 @@
 
 use desal_mesh::{Mat3, Vec3};
 
+use crate::classify::BOUNDARY;
+use crate::face_lists::FaceLists;
 use crate::quadric::Quadric;
 
 /// Weight of the volume term in the cost (CGAL's default).
@@ -41,6 +43,57 @@ pub(crate) struct Neighbourhood {
 }
 
 impl Neighbourhood {
+    /// The neighbourhood of edge `(a, b)` as the mesh is now: the faces incident to `a`
+    /// or `b` (each once) and the boundary edges at either (`flags` tells which slots are
+    /// on the boundary; positions are by slot).
+    pub(crate) fn gather(a: u32, b: u32, lists: &FaceLists, positions: &[Vec3], flags: &[u8]) -> Self {
+        let mut n = Self::default();
+        let p = |v: u32| &positions[v as usize];
+        for (v, other) in [(a, b), (b, a)] {
+            for &f in lists.of(v) {
+                let face = lists.face(f);
+                // Faces on the edge are in both lists: count them with `a`.
+                if v == b && face.contains(&other) {
+                    continue;
+                }
+                n.add_triangle(p(face[0]), p(face[1]), p(face[2]));
+            }
+        }
+        for (v, other) in [(a, b), (b, a)] {
+            if flags[v as usize] & BOUNDARY == 0 {
+                continue;
+            }
+            for &f in lists.of(v) {
+                let face = lists.face(f);
+                let i = face.iter().position(|&x| x == v).expect("face of v");
+                for (s, t) in [(face[i], face[(i + 1) % 3]), (face[(i + 2) % 3], face[i])] {
+                    let x = if s == v { t } else { s };
+                    if v == b && x == other {
+                        continue;
+                    }
+                    let sharing = lists.of(v).iter().filter(|&&g| lists.face(g).contains(&x)).count();
+                    if sharing == 1 {
+                        n.add_boundary_edge(p(s), p(t));
+                    }
+                }
+            }
+        }
+        n
+    }
+
+    /// Positions of the vertices adjacent to `a` or `b`, other than `a` and `b`, in
+    /// index order: the shape term of [`Self::placement`].
+    pub(crate) fn link_positions(a: u32, b: u32, lists: &FaceLists, positions: &[Vec3]) -> Vec<Vec3> {
+        let mut link: Vec<u32> = [a, b]
+            .iter()
+            .flat_map(|&v| lists.of(v).iter().flat_map(|&f| lists.face(f)))
+            .filter(|&x| x != a && x != b)
+            .collect();
+        link.sort_unstable();
+        link.dedup();
+        link.iter().map(|&x| positions[x as usize]).collect()
+    }
+
     /// Adds face `(p0, p1, p2)` (in its orientation) incident to an endpoint.
     #[inline]
     pub(crate) fn add_triangle(&mut self, p0: &Vec3, p1: &Vec3, p2: &Vec3) {

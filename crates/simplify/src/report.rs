@@ -21,10 +21,34 @@ pub struct Refusals {
     /// Would create a non-manifold edge, pinch two boundaries, or collapse a
     /// tetrahedron-like fan (the link condition).
     pub topology: usize,
-    /// Would rotate a face normal past `max_normal_rotation_deg`.
+    /// Would rotate a face normal past `max_normal_rotation_deg` (from before the
+    /// collapse or from the input face).
     pub flip: usize,
     /// Would create a (near-)zero-area triangle.
     pub degenerate: usize,
+    /// The fold guard: would leave a face more than `max_corner_normal_deg` from the
+    /// input normals of the vertices at its corners.
+    pub fold: usize,
+}
+
+/// Why one candidate collapse was refused (which counter of [`Refusals`] it adds to).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Refusal {
+    Topology,
+    Flip,
+    Degenerate,
+    Fold,
+}
+
+impl Refusals {
+    pub(crate) fn count(&mut self, refusal: Refusal) {
+        match refusal {
+            Refusal::Topology => self.topology += 1,
+            Refusal::Flip => self.flip += 1,
+            Refusal::Degenerate => self.degenerate += 1,
+            Refusal::Fold => self.fold += 1,
+        }
+    }
 }
 
 /// What one run did. Errors are RMS distances in mesh units: for a collapse,

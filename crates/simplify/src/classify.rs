@@ -1,0 +1,249 @@
+//! Phase 1 of the engine, as functions over explicit arrays: the face quadrics and input
+//! normals, the vertex normals, and per vertex its flags (boundary, non-manifold, part
+//! border) and its quadric (face planes plus boundary and part-border constraint planes,
+//! per pose). meshoptimizer's `fillFaceQuadrics`, `fillEdgeQuadrics` and
+//! `classifyVertices`.
+
+use desal_mesh::Vec3;
+use rayon::prelude::*;
+
+use crate::config::{PartBorders, SimplifyConfig};
+use crate::face_lists::FaceLists;
+use crate::quadric::{FacePlane, Quadric};
+
+/// Vertex flags, one byte per slot: the slot holds a vertex with faces.
+pub(crate) const ALIVE: u8 = 1;
+/// The vertex is on a boundary edge (an edge with one face).
+pub(crate) const BOUNDARY: u8 = 2;
+/// Input non-manifold vertex (pinched fans, or an edge with more than two faces): no
+/// incident edge is ever collapsed.
+pub(crate) const FROZEN: u8 = 4;
+/// The vertex keeps its position and is never removed; it may absorb neighbours.
+pub(crate) const PINNED: u8 = 8;
+
+/// Vertices (or faces, or edges) per work item of the parallel passes.
+pub(crate) const CHUNK: usize = 2048;
+
+/// An input face's unnormalised normal and its length (one cache line holds two).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct InputNormal {
+    pub(crate) normal: Vec3,
+    pub(crate) length: f64,
+}
+
+/// The plane of every face of one pose (whose quadric is the face's), in face order.
+pub(crate) fn fill_face_planes(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<FacePlane> {
+    faces
+        .par_iter()
+        .map(|f| {
+            let [a, b, c] = f.map(|v| positions[v as usize]);
+            FacePlane::of_triangle(&a, &b, &c)
+        })
+        .collect()
+}
+
+/// The unnormalised normal of every face (template pose, input coordinates): what the
+/// fold-over safeguard compares surviving faces with.
+pub(crate) fn compute_input_normals(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<InputNormal> {
+    faces
+        .par_iter()
+        .map(|f| {
+            let [a, b, c] = f.map(|v| positions[v as usize]);
+            let normal = (b - a).cross(&(c - a));
+            InputNormal { normal, length: normal.norm() }
+        })
+        .collect()
+}
+
+/// The unit area-weighted normal of every vertex (zero for an isolated vertex): the
+/// surface's orientation where the vertex came from.
+pub(crate) fn compute_vertex_normals(lists: &FaceLists, input_normals: &[InputNormal]) -> Vec<Vec3> {
+    (0..lists.slot_count() as u32)
+        .into_par_iter()
+        .map(|v| {
+            let sum: Vec3 = lists.of(v).iter().map(|&f| input_normals[f as usize].normal).sum();
+            let length = sum.norm();
+            if length > 0.0 { sum / length } else { Vec3::zeros() }
+        })
+        .collect()
+}
+
+/// What the per-vertex classification reads.
+pub(crate) struct ClassifyInput<'a> {
+    pub(crate) lists: &'a FaceLists,
+    /// Local positions, `[pose][vertex]`.
+    pub(crate) poses: &'a [Vec<Vec3>],
+    /// The plane of every face, when there is one pose (several poses: each face's
+    /// plane is computed where it is summed, per pose).
+    pub(crate) face_planes: Option<&'a [FacePlane]>,
+    pub(crate) part_labels: Option<&'a [u32]>,
+    pub(crate) config: &'a SimplifyConfig,
+}
+
+/// Flags of every vertex, and its quadrics `[slot * pose_count + pose]`, in one
+/// parallel pass writing in place (no per-chunk copies: on a million faces those
+/// would be the run's peak memory).
+pub(crate) fn classify_vertices(input: &ClassifyInput<'_>) -> (Vec<u8>, Vec<Quadric>) {
+    let n = input.lists.slot_count();
+    let pose_count = input.poses.len();
+    let mut flags = vec![0u8; n];
+    let mut quadrics = vec![Quadric::default(); n * pose_count];
+    flags.par_chunks_mut(CHUNK).zip(quadrics.par_chunks_mut(CHUNK * pose_count)).enumerate().for_each(
+        |(chunk, (flags, quadrics))| {
+            let mut link = Link::default();
+            for (i, (vertex_flags, vertex_quadrics)) in
+                flags.iter_mut().zip(quadrics.chunks_exact_mut(pose_count)).enumerate()
+            {
+                let v = (chunk * CHUNK + i) as u32;
+                link.gather(input.lists, v);
+                let constraints;
+                (*vertex_flags, constraints) = classify_vertex(input, &link, v);
+                fill_vertex_quadrics(input, &link, v, &constraints, vertex_quadrics);
+            }
+        },
+    );
+    (flags, quadrics)
+}
+
+/// The constraint weights that apply at one vertex.
+#[derive(Debug, Clone, Copy)]
+struct Constraints {
+    /// Boundary edges at the vertex are held with this weight.
+    boundary: Option<f64>,
+    /// Part-border edges at the vertex are held with this weight.
+    part_border: Option<f64>,
+}
+
+/// A vertex's flags: non-manifold (FROZEN) when an incident edge has more than two
+/// faces or its faces form more than one fan (a pinch, like SCAPE's vertex 419).
+fn classify_vertex(input: &ClassifyInput<'_>, link: &Link, v: u32) -> (u8, Constraints) {
+    let config = input.config;
+    let fans = (0..link.neighbours.len()).filter(|&i| link.parent[i] == i).count();
+    let mut flags = if input.lists.of(v).is_empty() { 0 } else { ALIVE };
+    let on_boundary = link.counts.contains(&1);
+    if on_boundary {
+        flags |= BOUNDARY;
+    }
+    if fans > 1 || link.counts.iter().any(|&c| c > 2) {
+        flags |= FROZEN;
+    }
+    let label_of = |x: u32| input.part_labels.map(|l| l[x as usize]);
+    let on_part_border =
+        input.part_labels.is_some() && link.neighbours.iter().any(|&x| label_of(x) != label_of(v));
+    if on_part_border && config.part_borders == PartBorders::Lock {
+        flags |= PINNED;
+    }
+    let part_border = match config.part_borders {
+        PartBorders::Constrain(w) if on_part_border && w > 0.0 => Some(w),
+        _ => None,
+    };
+    let boundary = (on_boundary && config.boundary_weight > 0.0).then_some(config.boundary_weight);
+    (flags, Constraints { boundary, part_border })
+}
+
+/// Vertex `v`'s quadric in every pose, into `out` (one per pose): the planes of its
+/// faces and the constraint planes of its boundary and part-border edges.
+fn fill_vertex_quadrics(
+    input: &ClassifyInput<'_>,
+    link: &Link,
+    v: u32,
+    constraints: &Constraints,
+    out: &mut [Quadric],
+) {
+    let label_of = |x: u32| input.part_labels.map(|l| l[x as usize]);
+    let my_faces = input.lists.of(v);
+    for (pose, positions) in input.poses.iter().enumerate() {
+        let mut q = Quadric::default();
+        let pv = &positions[v as usize];
+        for &f in my_faces {
+            let face = input.lists.face(f);
+            let [p0, p1, p2] = face.map(|x| positions[x as usize]);
+            match input.face_planes {
+                Some(planes) if pose == 0 => q += &planes[f as usize].quadric(),
+                _ => q += &Quadric::from_triangle(&p0, &p1, &p2),
+            }
+            if constraints.boundary.is_none() && constraints.part_border.is_none() {
+                continue;
+            }
+            let cross = (p1 - p0).cross(&(p2 - p0));
+            for x in others(face, v) {
+                let px = &positions[x as usize];
+                if let Some(w) = constraints.boundary
+                    && link.faces_shared(x) == 1
+                {
+                    q += &Quadric::edge_constraint(pv, px, &cross, w);
+                }
+                if let Some(w) = constraints.part_border
+                    && label_of(x) != label_of(v)
+                {
+                    q += &Quadric::edge_constraint(pv, px, &cross, w);
+                }
+            }
+        }
+        out[pose] = q;
+    }
+}
+
+/// The link of one vertex: its neighbours, how many of its faces each shares, and a
+/// union-find over them whose roots count the fans.
+#[derive(Debug, Default)]
+struct Link {
+    neighbours: Vec<u32>,
+    counts: Vec<u32>,
+    parent: Vec<usize>,
+}
+
+impl Link {
+    /// Rebuilds the link of `v` from its faces.
+    fn gather(&mut self, lists: &FaceLists, v: u32) {
+        self.neighbours.clear();
+        self.counts.clear();
+        self.parent.clear();
+        for &f in lists.of(v) {
+            let [x, y] = others(lists.face(f), v);
+            let (i, j) = (self.slot(x), self.slot(y));
+            self.counts[i] += 1;
+            self.counts[j] += 1;
+            let (ri, rj) = (self.root(i), self.root(j));
+            self.parent[ri.max(rj)] = ri.min(rj);
+        }
+    }
+
+    /// How many of the vertex's faces neighbour `x` shares (1: a boundary edge).
+    fn faces_shared(&self, x: u32) -> u32 {
+        let i = self.neighbours.iter().position(|&n| n == x).expect("a neighbour");
+        self.counts[i]
+    }
+
+    fn slot(&mut self, x: u32) -> usize {
+        match self.neighbours.iter().position(|&n| n == x) {
+            Some(i) => i,
+            None => {
+                self.neighbours.push(x);
+                self.counts.push(0);
+                self.parent.push(self.parent.len());
+                self.neighbours.len() - 1
+            }
+        }
+    }
+
+    fn root(&mut self, mut i: usize) -> usize {
+        while self.parent[i] != i {
+            self.parent[i] = self.parent[self.parent[i]];
+            i = self.parent[i];
+        }
+        i
+    }
+}
+
+/// The two vertices of `face` other than `v`, in face order after `v`.
+#[inline]
+pub(crate) fn others(face: [u32; 3], v: u32) -> [u32; 2] {
+    if face[0] == v {
+        [face[1], face[2]]
+    } else if face[1] == v {
+        [face[2], face[0]]
+    } else {
+        [face[0], face[1]]
+    }
+}

@@ -1,0 +1,213 @@
+//! Where the vertex of a collapsed edge goes and what the collapse costs: the quadric
+//! placements (optimal: the minimiser, then the best point of the edge, then the better
+//! endpoint; subset: the better endpoint), Lindstrom–Turk's, and the factors of the
+//! paper's Eq. 5. Read-only on the engine; `cost_of` is ranking's short path, asserted
+//! equal to the full `evaluate` in debug builds.
+
+use desal_mesh::Vec3;
+
+use crate::classify::{FROZEN, PINNED};
+use crate::collapse::{Candidate, Engine};
+use crate::config::{Metric, Placement};
+use crate::lindstrom_turk::Neighbourhood;
+
+/// Relative margin by which a computed placement must beat the better endpoint's error
+/// to be used instead of it (rounding noise must not move a vertex off its position).
+const SNAP_TOLERANCE: f64 = 1e-9;
+
+impl Engine {
+    /// Placement and cost of collapsing edge `(a, b)`; `None` when the edge may not
+    /// collapse at all (a frozen endpoint, both pinned, or a non-finite cost).
+    pub(crate) fn evaluate(&self, a: u32, b: u32) -> Option<Candidate> {
+        let (fa, fb) = (self.flags[a as usize], self.flags[b as usize]);
+        if (fa | fb) & FROZEN != 0 || (fa & fb) & PINNED != 0 {
+            return None;
+        }
+        let pinned = Pinned { a: fa & PINNED != 0, b: fb & PINNED != 0 };
+        let (pa, pb) = (&self.positions[a as usize], &self.positions[b as usize]);
+        let (candidate, error) = match self.params.metric {
+            Metric::LindstromTurk => self.evaluate_lindstrom_turk(a, b, pinned),
+            Metric::Quadric => {
+                let c = match (self.params.placement, pinned.any()) {
+                    (Placement::Subset, _) => self.place_on_endpoint(a, b, pinned),
+                    (Placement::Optimal, true) => {
+                        let keep = pinned.endpoint(a, b, |_| 0.0);
+                        self.candidate_at(a, b, self.positions[keep as usize], keep)
+                    }
+                    (Placement::Optimal, false) => self.place_optimally(a, b),
+                };
+                (c, c.error)
+            }
+        };
+        let cost = self.cost_factors(a, b, error, pa, pb);
+        cost.is_finite().then_some(Candidate { cost, ..candidate })
+    }
+
+    /// `error` times the enabled factors of Eq. 5: edge length, mean saliency weight.
+    #[inline]
+    fn cost_factors(&self, a: u32, b: u32, error: f64, pa: &Vec3, pb: &Vec3) -> f64 {
+        let mut cost = error;
+        if self.params.balance {
+            cost *= (pa - pb).norm();
+        }
+        if let Some(w) = &self.weights {
+            cost *= 0.5 * (w[a as usize] + w[b as usize]);
+        }
+        cost
+    }
+
+    /// [`Self::evaluate`] with Lindstrom–Turk's cost: the placement of
+    /// [`Neighbourhood::placement`] (or the cheaper endpoint: for subset placement, for a
+    /// pinned endpoint, or when that placement is undefined or flies farther than
+    /// `max_placement_distance`), costed from the current faces around the edge. The
+    /// candidate's `error` stays the merged quadric's, for the report; the returned
+    /// error is Lindstrom–Turk's, for the ranking.
+    fn evaluate_lindstrom_turk(&self, a: u32, b: u32, pinned: Pinned) -> (Candidate, f64) {
+        let pa = self.positions[a as usize];
+        let pb = self.positions[b as usize];
+        let squared_length = (pa - pb).norm_squared();
+        let n = Neighbourhood::gather(a, b, &self.lists, &self.positions, &self.flags);
+        let computed = if self.params.placement == Placement::Subset || pinned.any() {
+            None
+        } else {
+            let mid = (pa + pb) * 0.5;
+            let reach = self.params.max_placement_distance * squared_length.sqrt();
+            n.placement(squared_length, || Neighbourhood::link_positions(a, b, &self.lists, &self.positions))
+                .filter(|p| (p - mid).norm() <= reach)
+        };
+        let (position, keep) = match computed {
+            Some(p) => (p, nearer_endpoint(a, b, &pa, &pb, &p)),
+            None => {
+                let keep = pinned.endpoint(a, b, |k| n.cost(&self.positions[k as usize], squared_length));
+                (self.positions[keep as usize], keep)
+            }
+        };
+        (self.candidate_at(a, b, position, keep), n.cost(&position, squared_length))
+    }
+
+    /// Subset placement: keep whichever endpoint has the smaller merged error (the lower
+    /// index on a tie); a pinned endpoint is always the one kept.
+    fn place_on_endpoint(&self, a: u32, b: u32, pinned: Pinned) -> Candidate {
+        let keep = pinned.endpoint(a, b, |k| self.subset_error(a, b, k));
+        let remove = if keep == a { b } else { a };
+        Candidate {
+            remove,
+            keep,
+            position: self.positions[keep as usize],
+            error: self.subset_error(a, b, keep),
+            cost: 0.0,
+        }
+    }
+
+    /// Merged error of `(a, b)` when `keep` stays where it is, summed over poses.
+    #[inline]
+    fn subset_error(&self, a: u32, b: u32, keep: u32) -> f64 {
+        let pc = self.pose_count;
+        let (a, b, k) = (a as usize, b as usize, keep as usize);
+        let mut error = 0.0;
+        for p in 0..pc {
+            let q = self.quadrics[a * pc + p] + self.quadrics[b * pc + p];
+            let x = if pc == 1 { &self.positions[k] } else { &self.pose_positions[p][k] };
+            error += q.eval(x);
+        }
+        error.max(0.0)
+    }
+
+    /// Optimal placement (single pose): the quadric's minimiser if well-conditioned and
+    /// near the edge, else the best point of the segment, else the better endpoint.
+    fn place_optimally(&self, a: u32, b: u32) -> Candidate {
+        let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
+        let (position, error) = self.optimal_position(a, b);
+        let keep = nearer_endpoint(a, b, &pa, &pb, &position);
+        let remove = if keep == a { b } else { a };
+        Candidate { remove, keep, position, error, cost: 0.0 }
+    }
+
+    /// The optimal placement of `(a, b)` (see [`Self::place_optimally`]) and the merged
+    /// quadric's error there: all that ranking needs.
+    #[inline]
+    fn optimal_position(&self, a: u32, b: u32) -> (Vec3, f64) {
+        let q = self.quadrics[a as usize] + self.quadrics[b as usize];
+        let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
+        let (error_a, error_b) = (q.eval(&pa), q.eval(&pb));
+        let (endpoint, endpoint_error) = if error_b < error_a { (pb, error_b) } else { (pa, error_a) };
+        let mid = (pa + pb) * 0.5;
+        let reach = self.params.max_placement_distance * (pa - pb).norm();
+        let computed = match q.minimiser() {
+            Some(p) if (p - mid).norm() <= reach => Some(p),
+            _ => q.minimiser_on_segment(&pa, &pb),
+        };
+        // An endpoint as good as the computed point up to rounding is preferred: the
+        // vertex then keeps its exact input position (and `simp_to_orig` entry).
+        if let Some(p) = computed {
+            let error = q.eval(&p).max(0.0);
+            if endpoint_error > error * (1.0 + SNAP_TOLERANCE) {
+                return (p, error);
+            }
+        }
+        (endpoint, endpoint_error.max(0.0))
+    }
+
+    /// The cost of collapsing `(a, b)`, infinite when it may not collapse: what
+    /// [`Self::evaluate`] gives, without choosing the slot kept (the common case, an
+    /// optimal quadric placement with neither endpoint pinned, has a short path).
+    #[inline]
+    pub(crate) fn cost_of(&self, a: u32, b: u32) -> f64 {
+        let full = || self.evaluate(a, b).map_or(f64::INFINITY, |c| c.cost);
+        let (fa, fb) = (self.flags[a as usize], self.flags[b as usize]);
+        if self.params.placement == Placement::Subset
+            || self.params.metric == Metric::LindstromTurk
+            || (fa | fb) & (FROZEN | PINNED) != 0
+        {
+            return full();
+        }
+        let (pa, pb) = (&self.positions[a as usize], &self.positions[b as usize]);
+        let cost = self.cost_factors(a, b, self.optimal_position(a, b).1, pa, pb);
+        let cost = if cost.is_finite() { cost } else { f64::INFINITY };
+        debug_assert_eq!(cost.to_bits(), full().to_bits(), "fast and full cost of edge ({a}, {b}) differ");
+        cost
+    }
+
+    fn candidate_at(&self, a: u32, b: u32, position: Vec3, keep: u32) -> Candidate {
+        let remove = if keep == a { b } else { a };
+        let q = self.quadrics[a as usize] + self.quadrics[b as usize];
+        Candidate { remove, keep, position, error: q.eval(&position).max(0.0), cost: 0.0 }
+    }
+}
+
+/// Which endpoints of an edge are pinned (never both: such an edge is not evaluated).
+#[derive(Debug, Clone, Copy)]
+struct Pinned {
+    a: bool,
+    b: bool,
+}
+
+impl Pinned {
+    fn any(self) -> bool {
+        self.a || self.b
+    }
+
+    /// The endpoint a collapse onto an endpoint keeps: the pinned one, else the one with
+    /// the smaller `error_keeping` (the lower index on a tie).
+    #[inline]
+    fn endpoint(self, a: u32, b: u32, error_keeping: impl Fn(u32) -> f64) -> u32 {
+        let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+        if self.a {
+            a
+        } else if self.b {
+            b
+        } else if error_keeping(hi) < error_keeping(lo) {
+            hi
+        } else {
+            lo
+        }
+    }
+}
+
+/// The slot a moved vertex keeps: the endpoint nearer its new position (the lower index
+/// on a tie), so a vertex that did not move keeps its identity.
+#[inline]
+fn nearer_endpoint(a: u32, b: u32, pa: &Vec3, pb: &Vec3, position: &Vec3) -> u32 {
+    let (da, db) = ((position - pa).norm_squared(), (position - pb).norm_squared());
+    if da < db || (da == db && a < b) { a } else { b }
+}

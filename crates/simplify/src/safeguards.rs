@@ -1,0 +1,227 @@
+//! The safeguards a collapse must pass before it is performed, all read-only on the
+//! engine: the link condition (no non-manifold edge, no pinched boundary, no
+//! tetrahedral fan), and for every face that survives with a moved corner: no
+//! degeneracy, no normal turned past the limit from before the collapse or from the
+//! input, and the fold guard (no normal far from the input normals under its corners).
+
+use desal_mesh::Vec3;
+
+use crate::classify::BOUNDARY;
+use crate::collapse::{Candidate, Engine};
+use crate::marks::ScratchMarks;
+use crate::report::Refusal;
+
+/// A new face with `2·area < DEGENERATE_RATIO · (longest edge)²` counts as degenerate
+/// (a needle or cap flatter than one part in a million).
+const DEGENERATE_RATIO: f64 = 1e-6;
+
+impl Engine {
+    /// All safeguards for one candidate: the link condition, then the geometry of every
+    /// face that survives the collapse. `marks` is scratch.
+    pub(crate) fn check_collapse(&self, c: &Candidate, marks: &mut ScratchMarks) -> Result<(), Refusal> {
+        if !self.link_condition_holds(c.remove, c.keep, marks) {
+            return Err(Refusal::Topology);
+        }
+        self.check_moved_faces(c.remove, c.keep, &c.position)?;
+        if c.position != self.positions[c.keep as usize] {
+            self.check_moved_faces(c.keep, c.remove, &c.position)?;
+        }
+        Ok(())
+    }
+
+    /// The link condition (Dey et al. 1999) in the form that matters for a 2-manifold
+    /// with boundary: the endpoints' common neighbours are exactly the apexes of the
+    /// faces on the edge; an interior edge does not join two boundary vertices (that
+    /// would pinch); and no apex is left with a degenerate fan (a closed fan of three
+    /// faces — the tetrahedron case — or a single boundary face).
+    pub(crate) fn link_condition_holds(&self, a: u32, b: u32, marks: &mut ScratchMarks) -> bool {
+        let common = self.count_common_neighbours(a, b, marks);
+
+        let mut apexes = [0u32; 2];
+        let mut shared = 0;
+        for &f in self.lists.of(a) {
+            let face = self.lists.face(f);
+            if face.contains(&b) {
+                if shared == 2 {
+                    return false;
+                }
+                apexes[shared] = face.iter().copied().find(|&x| x != a && x != b).expect("three distinct");
+                shared += 1;
+            }
+        }
+        if shared == 0 || common != shared {
+            return false;
+        }
+        let boundary = |v: u32| self.flags[v as usize] & BOUNDARY != 0;
+        if shared == 2 && boundary(a) && boundary(b) {
+            return false;
+        }
+        apexes[..shared].iter().all(|&o| {
+            let fan = self.lists.count(o);
+            if boundary(o) { fan >= 2 } else { fan >= 4 }
+        })
+    }
+
+    /// The number of vertices adjacent to both `a` and `b`.
+    fn count_common_neighbours(&self, a: u32, b: u32, marks: &mut ScratchMarks) -> usize {
+        let of_a = marks.fresh();
+        for &f in self.lists.of(a) {
+            for x in self.lists.face(f) {
+                marks.insert(x, of_a);
+            }
+        }
+        let counted = marks.fresh();
+        let mut common = 0;
+        for &f in self.lists.of(b) {
+            for x in self.lists.face(f) {
+                if x != a && x != b && marks.contains(x, of_a) {
+                    marks.insert(x, counted);
+                    common += 1;
+                }
+            }
+        }
+        common
+    }
+
+    /// Moving `moved` to `position` (merging it with `other`): refuse if any of its faces
+    /// not shared with `other` becomes degenerate, turns its normal past the threshold
+    /// from before the collapse or from the input (`Flip`), or ends up too far from the
+    /// input normals of the vertices at its corners (`Fold`, `max_corner_normal_deg`).
+    pub(crate) fn check_moved_faces(&self, moved: u32, other: u32, position: &Vec3) -> Result<(), Refusal> {
+        for &f in self.lists.of(moved) {
+            let face = self.lists.face(f);
+            if face.contains(&other) {
+                continue;
+            }
+            let corners = face.map(|v| self.positions[v as usize]);
+            let old = (corners[1] - corners[0]).cross(&(corners[2] - corners[0]));
+            let new_corners = [0, 1, 2].map(|i| if face[i] == moved { *position } else { corners[i] });
+            let e0 = new_corners[1] - new_corners[0];
+            let e1 = new_corners[2] - new_corners[0];
+            let e2 = new_corners[2] - new_corners[1];
+            let new = e0.cross(&e1);
+            let longest_sq = e0.norm_squared().max(e1.norm_squared()).max(e2.norm_squared());
+            let twice_area = new.norm();
+            // Written so that a NaN area is refused too.
+            if twice_area.partial_cmp(&(DEGENERATE_RATIO * longest_sq)) != Some(std::cmp::Ordering::Greater) {
+                return Err(Refusal::Degenerate);
+            }
+            let old_norm = old.norm();
+            // A face that was already degenerate has no normal to compare with.
+            if old_norm > 0.0 && new.dot(&old) <= self.params.cos_max_rotation * old_norm * twice_area {
+                return Err(Refusal::Flip);
+            }
+            let input = &self.input_normals[f as usize];
+            if new.dot(&input.normal) <= self.params.cos_max_rotation * input.length * twice_area {
+                return Err(Refusal::Flip);
+            }
+            let n = &self.vertex_normals;
+            let reference: Vec3 = face
+                .iter()
+                .map(|&v| if v == moved { n[v as usize] + n[other as usize] } else { n[v as usize] })
+                .sum();
+            if new.dot(&reference) <= self.params.cos_max_corner_normal * reference.norm() * twice_area {
+                return Err(Refusal::Fold);
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use desal_mesh::TriMesh;
+
+    use super::*;
+    use crate::config::SimplifyConfig;
+
+    /// A flat hexagonal fan: centre 0 at the origin, ring 1..=6 at unit distance.
+    fn hexagon_fan() -> TriMesh {
+        let mut positions = vec![Vec3::zeros()];
+        positions.extend((0..6).map(|k| {
+            let t = k as f64 * std::f64::consts::TAU / 6.0;
+            Vec3::new(t.cos(), t.sin(), 0.0)
+        }));
+        let faces = (0..6u32).map(|k| [0, 1 + k, 1 + (k + 1) % 6]).collect();
+        TriMesh { positions, faces }
+    }
+
+    fn engine_for(mesh: &TriMesh, config: &SimplifyConfig) -> (Engine, ScratchMarks) {
+        let engine =
+            Engine::new(&[mesh.positions.as_slice()], 0, mesh, mesh.faces.clone(), None, None, config);
+        let marks = ScratchMarks::new(mesh.positions.len());
+        (engine, marks)
+    }
+
+    /// Collapsing ring vertex 1 into the centre while moving the centre past the
+    /// opposite side of the ring turns the far faces over: refused as a flip. The same
+    /// collapse onto the centre's own position is accepted.
+    #[test]
+    fn collapse_that_flips_a_face_is_refused() {
+        let (engine, mut marks) = engine_for(&hexagon_fan(), &SimplifyConfig::default());
+        let flipping =
+            Candidate { remove: 1, keep: 0, position: Vec3::new(-1.5, 0.0, 0.0), error: 0.0, cost: 0.0 };
+        assert_eq!(engine.check_collapse(&flipping, &mut marks), Err(Refusal::Flip));
+        let fine = Candidate { position: Vec3::zeros(), ..flipping };
+        assert_eq!(engine.check_collapse(&fine, &mut marks), Ok(()));
+    }
+
+    /// With the per-face limits off (180°), lifting the centre of a flat fan (ring
+    /// radius 1, so each ring edge is 0.866 from the centre) by 1.5 tilts each surviving
+    /// face by atan(1.5 / 0.866) = 60°, inside the fold guard's 70° of its corners' input
+    /// normals (+z): accepted. Lifting it by 3 tilts them by 74°: refused as a fold, not
+    /// as a flip.
+    #[test]
+    fn fold_guard_refuses_on_its_own() {
+        let config = SimplifyConfig { max_normal_rotation_deg: 180.0, ..SimplifyConfig::default() };
+        let (engine, mut marks) = engine_for(&hexagon_fan(), &config);
+        let lifted = |h: f64| Candidate {
+            remove: 1,
+            keep: 0,
+            position: Vec3::new(0.0, 0.0, h),
+            error: 0.0,
+            cost: 0.0,
+        };
+        assert_eq!(engine.check_collapse(&lifted(1.5), &mut marks), Ok(()));
+        assert_eq!(engine.check_collapse(&lifted(3.0), &mut marks), Err(Refusal::Fold));
+    }
+
+    /// Moving the centre exactly onto the line through two ring vertices flattens the
+    /// face between them to zero area: refused as degenerate.
+    #[test]
+    fn collapse_that_degenerates_a_face_is_refused() {
+        let (engine, mut marks) = engine_for(&hexagon_fan(), &SimplifyConfig::default());
+        // Face (0, 3, 4): ring 3 and 4 lie at 120° and 180°; their midpoint line.
+        let (p3, p4) = (engine.positions[3], engine.positions[4]);
+        let on_line = p3 + (p4 - p3) * 0.5;
+        let c = Candidate { remove: 1, keep: 0, position: on_line, error: 0.0, cost: 0.0 };
+        assert_eq!(engine.check_collapse(&c, &mut marks), Err(Refusal::Degenerate));
+    }
+
+    /// The link condition: in a closed octahedron every edge may collapse (apexes keep
+    /// fans of four), but once a vertex has valence 3 its edges may not.
+    #[test]
+    fn link_condition_refuses_tetrahedral_fans() {
+        let tetra = TriMesh {
+            positions: vec![Vec3::zeros(), Vec3::x(), Vec3::y(), Vec3::z()],
+            faces: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+        };
+        let (engine, mut marks) = engine_for(&tetra, &SimplifyConfig::default());
+        assert!(!engine.link_condition_holds(0, 1, &mut marks));
+        let octahedron = TriMesh {
+            positions: vec![Vec3::x(), -Vec3::x(), Vec3::y(), -Vec3::y(), Vec3::z(), -Vec3::z()],
+            faces: vec![
+                [0, 2, 4],
+                [2, 1, 4],
+                [1, 3, 4],
+                [3, 0, 4],
+                [2, 0, 5],
+                [1, 2, 5],
+                [3, 1, 5],
+                [0, 3, 5],
+            ],
+        };
+        let (engine, mut marks) = engine_for(&octahedron, &SimplifyConfig::default());
+        assert!(engine.link_condition_holds(0, 4, &mut marks));
+    }
+}

@@ -1,0 +1,56 @@
+//! The public types of stage 3's entry points: [`SimplifyInput`] in, [`Simplified`] out.
+
+use desal_mesh::TriMesh;
+
+use crate::report::SimplifyReport;
+
+/// The data one simplification reads.
+#[derive(Debug, Clone, Copy)]
+pub struct SimplifyInput<'a> {
+    /// The mesh to simplify (the template).
+    pub mesh: &'a TriMesh,
+    /// One weight per input vertex (stage 2's saliency, floor already applied), used by
+    /// the cost when [`crate::SimplifyConfig::saliency`] is on. `None`: all weights 1.
+    pub weights: Option<&'a [f64]>,
+    /// One part id per input vertex, used by [`crate::SimplifyConfig::part_borders`].
+    pub part_labels: Option<&'a [u32]>,
+}
+
+impl<'a> SimplifyInput<'a> {
+    /// A mesh with no weights and no labels.
+    pub fn new(mesh: &'a TriMesh) -> Self {
+        Self { mesh, weights: None, part_labels: None }
+    }
+
+    /// Adds per-vertex saliency weights.
+    pub fn with_weights(self, weights: &'a [f64]) -> Self {
+        Self { weights: Some(weights), ..self }
+    }
+
+    /// Adds per-vertex part labels.
+    pub fn with_part_labels(self, labels: &'a [u32]) -> Self {
+        Self { part_labels: Some(labels), ..self }
+    }
+}
+
+/// The result of a simplification.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Simplified {
+    /// The simplified mesh; its vertex indices are `simp_idx`. Vertices appear in
+    /// increasing order of the input vertex that holds their slot; faces keep the input's
+    /// relative order; orientation is preserved.
+    pub mesh: TriMesh,
+    /// For every `simp_idx`, the `orig_idx` whose exact input position the vertex has,
+    /// or `None` when optimal placement moved it. Always `Some` with
+    /// [`crate::Placement::Subset`] and for [`crate::simplify_multipose`].
+    pub simp_to_orig: Vec<Option<u32>>,
+    pub report: SimplifyReport,
+}
+
+impl Simplified {
+    /// `simp_to_orig` without the options, when every output vertex is an input vertex
+    /// (subset placement); `None` otherwise.
+    pub fn subset_indices(&self) -> Option<Vec<u32>> {
+        self.simp_to_orig.iter().copied().collect()
+    }
+}
