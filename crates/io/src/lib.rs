@@ -11,6 +11,7 @@ pub mod atomic;
 pub mod codec;
 pub mod error;
 pub mod labels;
+pub mod npz;
 pub mod obj;
 pub mod off;
 pub mod ply;
