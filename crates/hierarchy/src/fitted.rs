@@ -3,7 +3,8 @@
 //! vertex is in every pose, not only in the template.
 //!
 //! For fine vertex `i` with candidate coarse vertices `j ∈ N(i)` (its `k` nearest in the
-//! template pose — along the fine mesh's edges by default, see [`Neighbourhood`] — plus
+//! template pose — straight-line by default, or along the fine mesh's edges, see
+//! [`Neighbourhood`] — plus
 //! the corners of its barycentric row `b`), training poses `P`, and
 //! `d_jp = c_jp − x_ip` (coarse vertex `j` relative to the fine vertex, in pose `p`):
 //!
@@ -12,15 +13,16 @@
 //! ```
 //!
 //! Because the row sums to 1, `Σ_j w_j c_jp − x_ip = Σ_j w_j d_jp`: the residual is
-//! translation-free per pose, and working in offsets keeps the system well scaled. The
-//! constraint is eliminated with an orthonormal basis `N` of `{z : Σ z = 0}` (the last
-//! `m − 1` columns of the Householder reflection taking `e_0` to `1/√m`), `w = b + N y`,
-//! leaving the `(m − 1)²` system `(NᵀGN + λI) y = −NᵀG b`, with `G = (1/|P|) Σ_p D_pᵀD_p`.
-//! `λ = ridge · trace(G)/m`: the ridge is relative to the mean squared offset, so one
-//! value serves every level. With `ridge = 0` the system is solved by pseudo-inverse
-//! (eigenvalues below `1e-12` of the largest dropped): the least-squares row nearest
-//! to `b`, which reproduces training poses exactly when they are affine images of the
-//! template and the candidates span 3D.
+//! translation-free per pose, and working in offsets keeps the system well scaled. With
+//! `G = (1/|P|) Σ_p D_pᵀD_p` and `λ = ridge · trace(G)/m` (the ridge is relative to the
+//! mean squared offset, so one value serves every level), the KKT conditions are
+//! `(G + λI) w = λ b − ν 1` with `ν` fixed by `Σ w = 1`: one Cholesky and two solves.
+//! With `ridge = 0` (or a failed factorisation) the constraint is eliminated instead with
+//! an orthonormal basis `N` of `{z : Σ z = 0}` (the last `m − 1` columns of the
+//! Householder reflection taking `e_0` to `1/√m`), `w = b + N y`, and
+//! `(NᵀGN + λI) y = −NᵀG b` is solved by pseudo-inverse (eigenvalues below `1e-12` of the
+//! largest dropped): the least-squares row nearest to `b`, which reproduces training
+//! poses exactly when they are affine images of the template and the candidates span 3D.
 //!
 //! A fine vertex that *is* a coarse vertex gets weight 1 on itself (its exact answer).
 
@@ -38,11 +40,13 @@ type DenseVec = nalgebra::DVector<Real>;
 /// How "nearest" candidates are found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Neighbourhood {
-    /// Shortest paths along the fine mesh's edges in the template pose (Dijkstra).
+    /// Straight-line distance in the template pose (a uniform grid). The default: on
+    /// SCAPE within 0.003 of geodesic candidates in held-out error ratio, and 30 % faster.
     #[default]
-    Geodesic,
-    /// Straight-line distance in the template pose.
     Euclidean,
+    /// Shortest paths along the fine mesh's edges in the template pose (Dijkstra): never
+    /// reaches across a gap to another body part.
+    Geodesic,
 }
 
 /// The fitted upsampler's knobs.
@@ -52,7 +56,7 @@ pub struct FittedConfig {
     /// the barycentric corners are added. Default [`DEFAULT_NEIGHBOURS`] (see the crate
     /// docs for the held-out curve that chose it).
     pub neighbours: usize,
-    /// How nearness is measured. Default [`Neighbourhood::Geodesic`].
+    /// How nearness is measured. Default [`Neighbourhood::Euclidean`].
     pub neighbourhood: Neighbourhood,
     /// Ridge toward the barycentric row, relative to the mean squared offset of the
     /// candidates (dimensionless, `>= 0`). Default [`DEFAULT_RIDGE`].
@@ -103,6 +107,7 @@ pub fn fitted_rows(
         fine_to_coarse[fine_idx as usize] = coarse_idx as u32;
     }
 
+    let trajectories = Trajectories::new(fine, training);
     let solved: Vec<(Row, Solve)> = (0..fine.vertex_count())
         .into_par_iter()
         .map_init(
@@ -123,12 +128,11 @@ pub fn fitted_rows(
                 };
                 let candidates = candidates(nearest, &barycentric[fine_idx]);
                 fit_row(
-                    fine,
+                    &trajectories,
                     coarse_to_fine,
                     fine_idx,
                     &candidates,
                     &barycentric[fine_idx],
-                    training,
                     config.ridge,
                 )
             },
@@ -148,6 +152,33 @@ pub fn fitted_rows(
         })
         .collect();
     (rows, counts)
+}
+
+/// Every fine vertex's coordinates over the training poses, vertex-major
+/// (`[x, y, z]` per pose): a row's solve reads its candidates' blocks contiguously instead
+/// of striding across one array per pose.
+struct Trajectories {
+    poses: usize,
+    coords: Vec<Real>,
+}
+
+impl Trajectories {
+    fn new(fine: &PoseSet, training: &[usize]) -> Self {
+        let width = 3 * training.len();
+        let mut coords = vec![0.0; fine.vertex_count() * width];
+        coords.par_chunks_mut(width).enumerate().for_each(|(v, block)| {
+            for (slot, &p) in block.chunks_exact_mut(3).zip(training) {
+                let q = fine.poses[p][v];
+                slot.copy_from_slice(&[q.x, q.y, q.z]);
+            }
+        });
+        Self { poses: training.len(), coords }
+    }
+
+    fn of(&self, vertex: usize) -> &[Real] {
+        let width = 3 * self.poses;
+        &self.coords[vertex * width..(vertex + 1) * width]
+    }
 }
 
 enum Search {
@@ -172,12 +203,11 @@ fn candidates(mut c: Vec<u32>, barycentric: &Row) -> Vec<u32> {
 
 /// Solves one fine vertex's constrained ridge least squares (module docs).
 fn fit_row(
-    fine: &PoseSet,
+    trajectories: &Trajectories,
     coarse_to_fine: &[u32],
     fine_idx: usize,
     candidates: &[u32],
     barycentric: &Row,
-    training: &[usize],
     ridge: Real,
 ) -> (Row, Solve) {
     let m = candidates.len();
@@ -189,38 +219,79 @@ fn fit_row(
         return (vec![(candidates[0], 1.0)], Solve::Exact);
     }
 
-    // G = (1/|P|) Σ_p D_pᵀ D_p, D_p the 3 × m offsets of the candidates from the vertex.
-    let mut g = Dense::zeros(m, m);
-    let mut offsets = vec![Vec3::zeros(); m];
-    for &p in training {
-        let pose = &fine.poses[p];
-        let x = pose[fine_idx];
-        for (o, &j) in offsets.iter_mut().zip(candidates) {
-            *o = pose[coarse_to_fine[j as usize] as usize] - x;
-        }
-        for r in 0..m {
-            for c in r..m {
-                g[(r, c)] += offsets[r].dot(&offsets[c]);
-            }
+    // G = (1/|P|) DᵀD, with D the 3|P| × m offsets of the candidates from the vertex
+    // over the training poses (column j: candidate j's trajectory minus the vertex's).
+    let own = trajectories.of(fine_idx);
+    let mut d = Dense::zeros(own.len(), m);
+    for (j, &c) in candidates.iter().enumerate() {
+        let theirs = trajectories.of(coarse_to_fine[c as usize] as usize);
+        for ((out, t), o) in d.column_mut(j).iter_mut().zip(theirs).zip(own) {
+            *out = t - o;
         }
     }
+    let g = gram(&d, trajectories.poses as Real);
+    let lambda = ridge * g.trace() / m as Real;
+    let w = match solve_kkt(&g, &b, lambda) {
+        Some(w) => (w, Solve::Cholesky),
+        None => {
+            let n = sum_free_basis(m);
+            let reduced = n.transpose() * &g * &n;
+            let rhs = -(n.transpose() * (&g * &b));
+            (&b + n * pseudo_inverse_solve(reduced, rhs, lambda), Solve::PseudoInverse)
+        }
+    };
+    let (w, how) = w;
+    let row =
+        candidates.iter().zip(w.iter()).filter(|&(_, &wj)| wj != 0.0).map(|(&j, &wj)| (j, wj)).collect();
+    (row, how)
+}
+
+/// `DᵀD / scale`, upper half computed and mirrored, each entry a dot product of two
+/// contiguous columns with four accumulators (a fixed summation order, so the result
+/// does not depend on the machine's vector width).
+fn gram(d: &Dense, scale: Real) -> Dense {
+    let (rows, m) = d.shape();
+    let columns: Vec<&[Real]> = d.as_slice().chunks_exact(rows).collect();
+    let mut g = Dense::zeros(m, m);
     for r in 0..m {
         for c in r..m {
-            let v = g[(r, c)] / training.len() as Real;
+            let v = dot(columns[r], columns[c]) / scale;
             g[(r, c)] = v;
             g[(c, r)] = v;
         }
     }
+    g
+}
 
-    let n = sum_free_basis(m);
-    let reduced = n.transpose() * &g * &n;
-    let rhs = -(n.transpose() * (&g * &b));
-    let lambda = ridge * g.trace() / m as Real;
-    let (y, how) = solve_ridge(reduced, rhs, lambda);
-    let w = b + n * y;
-    let row =
-        candidates.iter().zip(w.iter()).filter(|&(_, &wj)| wj != 0.0).map(|(&j, &wj)| (j, wj)).collect();
-    (row, how)
+fn dot(a: &[Real], b: &[Real]) -> Real {
+    let mut acc = [0.0; 4];
+    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: Real = a4.remainder().iter().zip(b4.remainder()).map(|(x, y)| x * y).sum();
+    for (x, y) in a4.zip(b4) {
+        for k in 0..4 {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
+/// The constrained ridge problem through its KKT conditions when `λ > 0`:
+/// `(G + λI) w = λ b − ν 1` with `ν` chosen so that `Σ w = 1`; one Cholesky, two
+/// solves. `None` when `λ = 0` or the factorisation fails (then the caller uses the
+/// pseudo-inverse on the reduced system).
+fn solve_kkt(g: &Dense, b: &DenseVec, lambda: Real) -> Option<DenseVec> {
+    if lambda <= 0.0 {
+        return None;
+    }
+    let mut shifted = g.clone();
+    for i in 0..shifted.nrows() {
+        shifted[(i, i)] += lambda;
+    }
+    let chol = shifted.cholesky()?;
+    let a = chol.solve(&(b * lambda));
+    let e = chol.solve(&DenseVec::from_element(b.len(), 1.0));
+    let nu = (a.sum() - 1.0) / e.sum();
+    Some(a - e * nu)
 }
 
 /// The last `m − 1` columns of the Householder reflection `H = I − 2uuᵀ/uᵀu` with
@@ -234,18 +305,9 @@ fn sum_free_basis(m: usize) -> Dense {
     h.columns(1, m - 1).into_owned()
 }
 
-/// `(A + λI) y = r` for symmetric positive semi-definite `A`: Cholesky when `λ > 0`,
-/// else (or when Cholesky fails) the pseudo-inverse with relative cut-off 1e-12.
-fn solve_ridge(a: Dense, r: DenseVec, lambda: Real) -> (DenseVec, Solve) {
-    if lambda > 0.0 {
-        let mut shifted = a.clone();
-        for i in 0..shifted.nrows() {
-            shifted[(i, i)] += lambda;
-        }
-        if let Some(chol) = shifted.cholesky() {
-            return (chol.solve(&r), Solve::Cholesky);
-        }
-    }
+/// `(A + λI) y = r` for symmetric positive semi-definite `A` by pseudo-inverse: eigen
+/// directions with `σ + λ` below `1e-12` of the largest eigenvalue are dropped.
+fn pseudo_inverse_solve(a: Dense, r: DenseVec, lambda: Real) -> DenseVec {
     let eigen = a.symmetric_eigen();
     let largest = eigen.eigenvalues.iter().fold(0.0, |m: Real, &v| m.max(v));
     let mut y = DenseVec::zeros(r.len());
@@ -256,7 +318,7 @@ fn solve_ridge(a: Dense, r: DenseVec, lambda: Real) -> (DenseVec, Solve) {
             y += u * (u.dot(&r) / shifted);
         }
     }
-    (y, Solve::PseudoInverse)
+    y
 }
 
 #[cfg(test)]

@@ -1,5 +1,5 @@
 //! k nearest coarse vertices along the fine mesh's edges (Dijkstra in the template
-//! pose): the fitted upsampler's default candidates. Unlike Euclidean neighbours they do
+//! pose): the fitted upsampler's optional candidates. Unlike Euclidean neighbours they do
 //! not jump across a gap to another body part (an arm to the torso, one thigh to the
 //! other), whose vertices move differently in other poses.
 //!
@@ -51,11 +51,12 @@ impl EdgeGraph {
 pub struct Scratch {
     distance: Vec<Real>,
     touched: Vec<u32>,
+    heap: BinaryHeap<Entry>,
 }
 
 impl Scratch {
     pub fn new(vertex_count: usize) -> Self {
-        Self { distance: vec![Real::INFINITY; vertex_count], touched: Vec::new() }
+        Self { distance: vec![Real::INFINITY; vertex_count], touched: Vec::new(), heap: BinaryHeap::new() }
     }
 }
 
@@ -91,7 +92,8 @@ pub fn nearest_marked(
     scratch: &mut Scratch,
 ) -> Vec<u32> {
     let mut found = Vec::with_capacity(k);
-    let mut heap = BinaryHeap::new();
+    let heap = &mut scratch.heap;
+    heap.clear();
     scratch.distance[source as usize] = 0.0;
     scratch.touched.push(source);
     heap.push(Entry { distance: 0.0, vertex: source });

@@ -25,31 +25,31 @@
 //! ## Choices, measured on SCAPE (levels [2500, 625], subset placement)
 //!
 //! `cargo run --release -p desal-hierarchy --example scape_upsampling [-- --tune]`.
-//! The fitted upsampler's defaults (16 geodesic neighbours, relative ridge 3e-3) were
+//! The fitted upsampler's defaults (16 Euclidean neighbours, relative ridge 3e-3) were
 //! chosen without the odd poses: fitted on poses ≡ 0 (mod 4), validated on poses ≡ 2
 //! (mod 4) of the paper's hierarchy. Held-out MSE ratio fitted / barycentric at 2500 |
-//! at 625 composed, for geodesic candidates:
+//! at 625 composed, Euclidean candidates:
 //!
 //! | k \ ridge | 0 | 1e-3 | 3e-3 | 1e-2 | 3e-2 |
 //! |---|---|---|---|---|---|
-//! | 8 | 0.569 \| 0.343 | 0.549 \| 0.338 | 0.544 \| 0.344 | 0.556 \| 0.366 | 0.585 \| 0.406 |
-//! | 12 | 0.581 \| 0.331 | 0.535 \| 0.315 | 0.524 \| 0.318 | 0.536 \| 0.336 | 0.563 \| 0.367 |
-//! | 16 | 0.626 \| 0.344 | 0.537 \| 0.310 | **0.521 \| 0.311** | 0.531 \| 0.326 | 0.555 \| 0.352 |
-//! | 24 | 0.774 \| 0.413 | 0.549 \| 0.311 | 0.525 \| 0.308 | 0.529 \| 0.319 | 0.549 \| 0.338 |
-//! | 32 | 1.037 \| 0.575 | 0.561 \| 0.316 | 0.531 \| 0.311 | 0.532 \| 0.319 | 0.548 \| 0.334 |
+//! | 8 | 0.573 \| 0.346 | 0.552 \| 0.340 | 0.545 \| 0.346 | 0.556 \| 0.368 | 0.584 \| 0.406 |
+//! | 12 | 0.590 \| 0.334 | 0.540 \| 0.319 | 0.528 \| 0.322 | 0.538 \| 0.341 | 0.564 \| 0.373 |
+//! | 16 | 0.627 \| 0.346 | 0.540 \| 0.312 | **0.524 \| 0.313** | 0.532 \| 0.329 | 0.557 \| 0.357 |
+//! | 24 | 0.775 \| 0.413 | 0.551 \| 0.312 | 0.526 \| 0.309 | 0.530 \| 0.320 | 0.550 \| 0.341 |
+//! | 32 | 1.048 \| 0.570 | 0.565 \| 0.318 | 0.533 \| 0.312 | | |
 //!
-//! Without a ridge, many neighbours overfit (k = 32: worse than barycentric); with
-//! it, k from 16 to 32 is a plateau and 16 is the cheapest point on it. Euclidean
-//! candidates are within 0.003 of geodesic ones (k = 16, ridge 3e-3: 0.524 | 0.313); geodesic
-//! is the default because it never reaches across a gap to another body part.
+//! Without a ridge, many neighbours overfit (k = 32: worse than barycentric); with it,
+//! k from 16 to 32 is a plateau and 16 is the cheapest point on it. Geodesic candidates
+//! ([`Neighbourhood::Geodesic`]) are within 0.003 (k = 16, ridge 3e-3: 0.521 | 0.311) and
+//! cost 30 % more time, so Euclidean is the default.
 //!
 //! With those defaults, fitted on the 36 even poses and measured on the 35 odd ones,
-//! MSE fitted / barycentric is 0.481 at 2500 and 0.283 at 625 (composed) for the
-//! paper's hierarchy (qslim's: 0.481, 0.295), and the paper's hierarchy with the fitted
-//! U is 53.5 % below COMA's recipe (qslim + barycentric) at 2500 (71.1 % at 625).
+//! MSE fitted / barycentric is 0.483 at 2500 and 0.286 at 625 (composed) for the
+//! paper's hierarchy (qslim's: 0.484, 0.299), and the paper's hierarchy with the fitted
+//! U is 53.3 % below COMA's recipe (qslim + barycentric) at 2500 (70.8 % at 625).
 //! Saliency for level 2 is recomputed on level 1's pose set rather than carried down
-//! from level 0: with the fitted U it gives 10.73e-6 against 10.78e-6 m² at 625 (with the
-//! barycentric U the order flips, 37.9e-6 against 37.2e-6), a small margin either way.
+//! from level 0: with the fitted U it gives 10.84e-6 against 10.88e-6 m² at 625 (with the
+//! barycentric U the order flips, 37.9e-6 against 37.2e-6): a small margin either way.
 //!
 //! Deterministic: rows are solved in parallel and collected in order; nearest-face and
 //! nearest-vertex ties go to the lower index; the same input gives the same matrices

@@ -6,7 +6,8 @@
 use desal_eval::closest_point::point_triangle_distance_sq;
 use desal_hierarchy::barycentric::projection_row;
 use desal_hierarchy::{
-    FittedConfig, HierarchyError, LevelInput, Upsampler, adjacency, build_level, nest, upsampling_error,
+    FittedConfig, HierarchyError, LevelInput, Neighbourhood, Upsampler, adjacency, build_level, nest,
+    upsampling_error,
 };
 use desal_mesh::{Face, Mat3, PoseSet, TriMesh, Vec3};
 use rand::{Rng, SeedableRng};
@@ -144,9 +145,11 @@ fn up_rows_sum_to_one() {
     let fine = bent_poses(&bumpy_grid(N), 6);
     let (coarse, faces) = (grid_subset(N, 2), grid_faces(N, 2));
     let mask = vec![true; 6];
+    let geodesic = FittedConfig { neighbourhood: Neighbourhood::Geodesic, ..FittedConfig::default() };
     for up in [
         Upsampler::Barycentric,
         Upsampler::default(),
+        Upsampler::Fitted(geodesic),
         Upsampler::Fitted(FittedConfig { neighbours: 5, ridge: 0.0, ..FittedConfig::default() }),
     ] {
         let level = build_level(&input(&fine, &coarse, &faces, &mask), &up).unwrap();
@@ -180,13 +183,21 @@ fn fitted_reproduces_affine_training_poses() {
     let poses = affine_poses(&bumpy_grid(N), 8, 3);
     let (coarse, faces) = (grid_subset(N, 2), grid_faces(N, 2));
     let mask = vec![true, true, true, true, true, false, false, false];
-    let fitted = Upsampler::Fitted(FittedConfig { neighbours: 8, ridge: 0.0, ..FittedConfig::default() });
-    let level = build_level(&input(&poses, &coarse, &faces, &mask), &fitted).unwrap();
     let bary = build_level(&input(&poses, &coarse, &faces, &mask), &Upsampler::Barycentric).unwrap();
     let all: Vec<usize> = (0..8).collect();
-    let fitted_error = upsampling_error(&poses, &level.up, &coarse, &all).unwrap();
-    for e in &fitted_error.per_pose {
-        assert!(e.mse < 1e-24, "pose {} (training: {}): mse {}", e.pose, mask[e.pose], e.mse);
+    for neighbourhood in [Neighbourhood::Euclidean, Neighbourhood::Geodesic] {
+        let fitted = Upsampler::Fitted(FittedConfig { neighbours: 8, neighbourhood, ridge: 0.0 });
+        let level = build_level(&input(&poses, &coarse, &faces, &mask), &fitted).unwrap();
+        let fitted_error = upsampling_error(&poses, &level.up, &coarse, &all).unwrap();
+        for e in &fitted_error.per_pose {
+            assert!(
+                e.mse < 1e-24,
+                "{neighbourhood:?} pose {} (training: {}): mse {}",
+                e.pose,
+                mask[e.pose],
+                e.mse
+            );
+        }
     }
     let bary_error = upsampling_error(&poses, &bary.up, &coarse, &all).unwrap();
     assert!(bary_error.mse > 1e-5, "barycentric mse {}", bary_error.mse);
