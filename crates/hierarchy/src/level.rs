@@ -222,7 +222,8 @@ pub fn adjacency(vertex_count: usize, faces: &[Face]) -> Result<CsrMatrix, Hiera
 
 /// `orig{k+1}`: the level-0 vertex of each coarse vertex, from the fine level's
 /// `orig{k}` and the coarse level's `map{k+1}` (`coarse_to_fine`). The maps nest by
-/// construction: `orig{k+1}[i] = orig{k}[map{k+1}[i]]`.
+/// construction: `orig{k+1}[i] = orig{k}[map{k+1}[i]]`. Panics on a `coarse_to_fine`
+/// entry past `fine_to_orig` (which [`build_level`] refuses with an error first).
 pub fn nest(fine_to_orig: &[u32], coarse_to_fine: &[u32]) -> Vec<u32> {
     coarse_to_fine.iter().map(|&f| fine_to_orig[f as usize]).collect()
 }
