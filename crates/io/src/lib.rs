@@ -12,6 +12,7 @@ pub mod codec;
 pub mod dir;
 pub mod error;
 pub mod labels;
+pub mod npz;
 pub mod obj;
 pub mod off;
 pub mod ply;

@@ -1,0 +1,615 @@
+//! numpy's `.npz`: a zip of `.npy` arrays, plain arrays only (no pickle), so numpy
+//! (`np.load`), Julia, MATLAB or any zip + npy reader loads it; and the layout of
+//! `hierarchy.npz` ([`HierarchyArrays`]).
+//!
+//! Written by hand rather than through a zip crate: the subset is tiny and fixed — stored
+//! (uncompressed) entries, as `np.savez` itself writes, npy format 1.0, little-endian
+//! `<i4`/`<i8`/`<f8`, C order — and the reader must bound every length by the file's
+//! size, which is easiest to see in one short file. CRC-32 comes from `crc32fast`.
+//! Limits: no zip64, so under 4 GiB and 65 535 arrays (a hierarchy of SCAPE is ~2 MB).
+//!
+//! The reader accepts what the writer writes, and `np.savez` files of the same dtypes:
+//! stored entries, npy 1.0 or 2.0 headers, C order. It refuses anything else with a
+//! message naming the entry. Every write is atomic ([`crate::atomic`]).
+
+use std::io::ErrorKind;
+use std::path::Path;
+
+use crate::atomic::write_atomic;
+use crate::error::IoError;
+
+/// The element type and values of an array, in C order.
+#[derive(Debug, Clone, PartialEq)]
+pub enum NpyData {
+    I32(Vec<i32>),
+    I64(Vec<i64>),
+    F64(Vec<f64>),
+}
+
+impl NpyData {
+    fn len(&self) -> usize {
+        match self {
+            NpyData::I32(v) => v.len(),
+            NpyData::I64(v) => v.len(),
+            NpyData::F64(v) => v.len(),
+        }
+    }
+
+    fn descr(&self) -> &'static str {
+        match self {
+            NpyData::I32(_) => "<i4",
+            NpyData::I64(_) => "<i8",
+            NpyData::F64(_) => "<f8",
+        }
+    }
+}
+
+/// One array: a shape and `shape.iter().product()` values.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NpyArray {
+    pub shape: Vec<usize>,
+    pub data: NpyData,
+}
+
+impl NpyArray {
+    /// A 1-D array.
+    pub fn vector(data: NpyData) -> Self {
+        Self { shape: vec![data.len()], data }
+    }
+}
+
+/// A named array of an npz (the name without `.npy`).
+pub type NamedArray = (String, NpyArray);
+
+/// Writes `arrays` as an npz at `path`, atomically. Errors: an array whose shape does
+/// not match its length, an archive past the zip limits, or the write itself.
+pub fn write_npz(path: &Path, arrays: &[NamedArray]) -> Result<(), IoError> {
+    let bytes = encode_npz(arrays).map_err(|reason| invalid(path, reason))?;
+    write_atomic(path, &bytes)
+}
+
+/// Reads every array of the npz at `path`, in archive order.
+pub fn read_npz(path: &Path) -> Result<Vec<NamedArray>, IoError> {
+    let bytes = std::fs::read(path).map_err(|e| IoError::Io { path: path.to_owned(), cause: e })?;
+    decode_npz(&bytes).map_err(|reason| invalid(path, reason))
+}
+
+fn invalid(path: &Path, reason: String) -> IoError {
+    IoError::Io { path: path.to_owned(), cause: std::io::Error::new(ErrorKind::InvalidData, reason) }
+}
+
+// ---- zip (stored entries only) ----
+
+const LOCAL_SIGNATURE: u32 = 0x0403_4b50;
+const CENTRAL_SIGNATURE: u32 = 0x0201_4b50;
+const END_SIGNATURE: u32 = 0x0605_4b50;
+const LOCAL_HEADER_LEN: usize = 30;
+const CENTRAL_HEADER_LEN: usize = 46;
+const END_LEN: usize = 22;
+/// Version 2.0: the oldest that readers accept for stored entries with directories.
+const ZIP_VERSION: u16 = 20;
+/// MS-DOS date of 1980-01-01 (the zip epoch): a fixed timestamp keeps the bytes
+/// reproducible.
+const DOS_DATE: u16 = (1 << 5) | 1;
+
+/// The npz's bytes.
+pub fn encode_npz(arrays: &[NamedArray]) -> Result<Vec<u8>, String> {
+    if arrays.len() > u16::MAX as usize {
+        return Err(format!("{} arrays exceed the zip limit of 65535", arrays.len()));
+    }
+    let mut out = Vec::new();
+    let mut central = Vec::new();
+    for (name, array) in arrays {
+        let file_name = format!("{name}.npy");
+        let payload = encode_npy(array).map_err(|e| format!("array '{name}': {e}"))?;
+        let offset = to_u32(out.len(), "archive")?;
+        let size = to_u32(payload.len(), &file_name)?;
+        let name_len = u16::try_from(file_name.len()).map_err(|_| format!("name '{name}' is too long"))?;
+        let crc = crc32fast::hash(&payload);
+
+        put_u32(&mut out, LOCAL_SIGNATURE);
+        for v in [ZIP_VERSION, 0, 0, 0, DOS_DATE] {
+            put_u16(&mut out, v); // version, flags, method (stored), time, date
+        }
+        for v in [crc, size, size] {
+            put_u32(&mut out, v);
+        }
+        put_u16(&mut out, name_len);
+        put_u16(&mut out, 0); // extra field length
+        out.extend_from_slice(file_name.as_bytes());
+        out.extend_from_slice(&payload);
+
+        put_u32(&mut central, CENTRAL_SIGNATURE);
+        for v in [ZIP_VERSION, ZIP_VERSION, 0, 0, 0, DOS_DATE] {
+            put_u16(&mut central, v); // made by, needed, flags, method, time, date
+        }
+        for v in [crc, size, size] {
+            put_u32(&mut central, v);
+        }
+        for v in [name_len, 0, 0, 0, 0] {
+            put_u16(&mut central, v); // name, extra, comment lengths, disk, internal attrs
+        }
+        put_u32(&mut central, 0); // external attributes
+        put_u32(&mut central, offset);
+        central.extend_from_slice(file_name.as_bytes());
+    }
+    let central_offset = to_u32(out.len(), "archive")?;
+    let central_size = to_u32(central.len(), "central directory")?;
+    out.extend_from_slice(&central);
+    put_u32(&mut out, END_SIGNATURE);
+    for v in [0, 0, arrays.len() as u16, arrays.len() as u16] {
+        put_u16(&mut out, v); // this disk, directory disk, entries here, entries in all
+    }
+    put_u32(&mut out, central_size);
+    put_u32(&mut out, central_offset);
+    put_u16(&mut out, 0); // comment length
+    to_u32(out.len(), "archive")?;
+    Ok(out)
+}
+
+/// Decodes an npz from its bytes. Every offset and length read from the file is checked
+/// against `bytes.len()` before it is used.
+pub fn decode_npz(bytes: &[u8]) -> Result<Vec<NamedArray>, String> {
+    let end = find_end_record(bytes)?;
+    let entries = read_u16(bytes, end + 10)? as usize;
+    let central_size = read_u32(bytes, end + 12)? as usize;
+    let central_offset = read_u32(bytes, end + 16)? as usize;
+    if central_offset.checked_add(central_size).is_none_or(|e| e > end) {
+        return Err("the central directory lies outside the file".into());
+    }
+    let mut arrays = Vec::with_capacity(entries.min(central_size / CENTRAL_HEADER_LEN));
+    let mut at = central_offset;
+    for _ in 0..entries {
+        if read_u32(bytes, at)? != CENTRAL_SIGNATURE {
+            return Err(format!("no central directory entry at byte {at}"));
+        }
+        let method = read_u16(bytes, at + 10)?;
+        let crc = read_u32(bytes, at + 16)?;
+        let size = read_u32(bytes, at + 20)? as usize;
+        let stored_size = read_u32(bytes, at + 24)? as usize;
+        let name_len = read_u16(bytes, at + 28)? as usize;
+        let extra_len = read_u16(bytes, at + 30)? as usize;
+        let comment_len = read_u16(bytes, at + 32)? as usize;
+        let local = read_u32(bytes, at + 42)? as usize;
+        let name = slice(bytes, at + CENTRAL_HEADER_LEN, name_len)?;
+        let name = std::str::from_utf8(name).map_err(|_| "an entry name is not UTF-8".to_owned())?.to_owned();
+        if method != 0 || size != stored_size {
+            return Err(format!(
+                "entry '{name}' is compressed (method {method}); only stored entries are read (np.savez, not savez_compressed)"
+            ));
+        }
+        if read_u32(bytes, local)? != LOCAL_SIGNATURE {
+            return Err(format!("entry '{name}': no local header at byte {local}"));
+        }
+        let local_name = read_u16(bytes, local + 26)? as usize;
+        let local_extra = read_u16(bytes, local + 28)? as usize;
+        let payload = slice(bytes, local + LOCAL_HEADER_LEN + local_name + local_extra, size)
+            .map_err(|e| format!("entry '{name}': {e}"))?;
+        if crc32fast::hash(payload) != crc {
+            return Err(format!("entry '{name}': CRC-32 mismatch, the file is corrupt"));
+        }
+        let array = decode_npy(payload).map_err(|e| format!("entry '{name}': {e}"))?;
+        let stem = name.strip_suffix(".npy").unwrap_or(&name).to_owned();
+        arrays.push((stem, array));
+        at += CENTRAL_HEADER_LEN + name_len + extra_len + comment_len;
+    }
+    Ok(arrays)
+}
+
+/// The end-of-central-directory record: the last 22 bytes, or earlier when the archive
+/// has a comment (at most 65 535 bytes).
+fn find_end_record(bytes: &[u8]) -> Result<usize, String> {
+    let last = bytes.len().checked_sub(END_LEN).ok_or("not a zip file: too short")?;
+    let first = last.saturating_sub(u16::MAX as usize);
+    (first..=last)
+        .rev()
+        .find(|&at| read_u32(bytes, at) == Ok(END_SIGNATURE))
+        .ok_or_else(|| "not a zip file: no end-of-central-directory record".to_owned())
+}
+
+// ---- npy ----
+
+const NPY_MAGIC: &[u8] = b"\x93NUMPY";
+
+/// One `.npy` file, format 1.0, header padded so the data starts on a 64-byte boundary
+/// (what numpy writes).
+fn encode_npy(array: &NpyArray) -> Result<Vec<u8>, String> {
+    let count = array.shape.iter().try_fold(1usize, |a, &d| a.checked_mul(d)).ok_or("shape overflows")?;
+    if count != array.data.len() {
+        return Err(format!(
+            "shape {:?} holds {count} values, the data has {}",
+            array.shape,
+            array.data.len()
+        ));
+    }
+    let shape = match array.shape.as_slice() {
+        [one] => format!("({one},)"),
+        dims => format!("({})", dims.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ")),
+    };
+    let mut header =
+        format!("{{'descr': '{}', 'fortran_order': False, 'shape': {shape}, }}", array.data.descr());
+    let unpadded = NPY_MAGIC.len() + 4 + header.len() + 1;
+    header.push_str(&" ".repeat((64 - unpadded % 64) % 64));
+    header.push('\n');
+    let header_len = u16::try_from(header.len()).map_err(|_| "npy header too long".to_owned())?;
+    let mut out = Vec::with_capacity(NPY_MAGIC.len() + 4 + header.len() + count * 8);
+    out.extend_from_slice(NPY_MAGIC);
+    out.extend_from_slice(&[1, 0]);
+    put_u16(&mut out, header_len);
+    out.extend_from_slice(header.as_bytes());
+    match &array.data {
+        NpyData::I32(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+        NpyData::I64(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+        NpyData::F64(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+    }
+    Ok(out)
+}
+
+fn decode_npy(bytes: &[u8]) -> Result<NpyArray, String> {
+    if slice(bytes, 0, NPY_MAGIC.len())? != NPY_MAGIC {
+        return Err("not an npy array (bad magic)".into());
+    }
+    let major = *bytes.get(6).ok_or("truncated npy header")?;
+    let (header_len, header_start) = match major {
+        1 => (read_u16(bytes, 8)? as usize, 10),
+        2 | 3 => (read_u32(bytes, 8)? as usize, 12),
+        v => return Err(format!("npy format version {v} is not supported")),
+    };
+    let header =
+        std::str::from_utf8(slice(bytes, header_start, header_len)?).map_err(|_| "npy header is not text")?;
+    let descr = header_value(header, "descr")?;
+    let descr = descr.trim_matches(|c| c == '\'' || c == '"');
+    if header_value(header, "fortran_order")? != "False" {
+        return Err("Fortran-order arrays are not supported".into());
+    }
+    let shape = parse_shape(header_value(header, "shape")?)?;
+    let count = shape.iter().try_fold(1usize, |a, &d| a.checked_mul(d)).ok_or("shape overflows")?;
+    let data = &bytes[header_start + header_len..];
+    let item = match descr {
+        "<i4" => 4,
+        "<i8" | "<f8" => 8,
+        other => {
+            return Err(format!("dtype '{other}' is not supported (int32, int64, float64 little-endian)"));
+        }
+    };
+    if count.checked_mul(item) != Some(data.len()) {
+        return Err(format!(
+            "shape {shape:?} needs {count} values of {item} bytes, the entry holds {} bytes",
+            data.len()
+        ));
+    }
+    let data = match descr {
+        "<i4" => {
+            NpyData::I32(data.chunks_exact(4).map(|c| i32::from_le_bytes(c.try_into().unwrap())).collect())
+        }
+        "<i8" => {
+            NpyData::I64(data.chunks_exact(8).map(|c| i64::from_le_bytes(c.try_into().unwrap())).collect())
+        }
+        _ => NpyData::F64(data.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap())).collect()),
+    };
+    Ok(NpyArray { shape, data })
+}
+
+/// The text after `'key':` up to the next top-level comma (a tuple's commas are inside
+/// parentheses).
+fn header_value<'a>(header: &'a str, key: &str) -> Result<&'a str, String> {
+    let quoted = [format!("'{key}':"), format!("\"{key}\":")];
+    let start = quoted
+        .iter()
+        .find_map(|k| header.find(k.as_str()).map(|i| i + k.len()))
+        .ok_or_else(|| format!("npy header has no '{key}'"))?;
+    let rest = &header[start..];
+    let mut depth = 0;
+    for (i, c) in rest.char_indices() {
+        match c {
+            '(' => depth += 1,
+            ')' => depth -= 1,
+            ',' | '}' if depth == 0 => return Ok(rest[..i].trim()),
+            _ => {}
+        }
+    }
+    Err(format!("npy header value of '{key}' is not terminated"))
+}
+
+fn parse_shape(text: &str) -> Result<Vec<usize>, String> {
+    let inner = text
+        .strip_prefix('(')
+        .and_then(|t| t.strip_suffix(')'))
+        .ok_or_else(|| format!("npy shape '{text}' is not a tuple"))?;
+    inner
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse::<usize>().map_err(|_| format!("npy shape '{text}' has a bad dimension '{s}'")))
+        .collect()
+}
+
+// ---- little-endian helpers, bounds-checked ----
+
+fn slice(bytes: &[u8], at: usize, len: usize) -> Result<&[u8], String> {
+    at.checked_add(len)
+        .and_then(|end| bytes.get(at..end))
+        .ok_or_else(|| format!("{len} bytes at offset {at} run past the end ({} bytes)", bytes.len()))
+}
+
+fn read_u16(bytes: &[u8], at: usize) -> Result<u16, String> {
+    Ok(u16::from_le_bytes(slice(bytes, at, 2)?.try_into().unwrap()))
+}
+
+fn read_u32(bytes: &[u8], at: usize) -> Result<u32, String> {
+    Ok(u32::from_le_bytes(slice(bytes, at, 4)?.try_into().unwrap()))
+}
+
+fn put_u16(out: &mut Vec<u8>, v: u16) {
+    out.extend_from_slice(&v.to_le_bytes());
+}
+
+fn put_u32(out: &mut Vec<u8>, v: u32) {
+    out.extend_from_slice(&v.to_le_bytes());
+}
+
+fn to_u32(n: usize, what: &str) -> Result<u32, String> {
+    u32::try_from(n).map_err(|_| format!("{what} exceeds the 4 GiB zip limit (no zip64)"))
+}
+
+// ---- hierarchy.npz ----
+
+/// A sparse matrix as COO triplets (scipy's `coo_matrix((data, (row, col)), shape)`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CooArrays {
+    /// `[rows, cols]`.
+    pub shape: [usize; 2],
+    pub row: Vec<u32>,
+    pub col: Vec<u32>,
+    pub data: Vec<f64>,
+}
+
+/// The arrays of `hierarchy.npz`, levels `0..=L` (level 0 the input mesh). Keys:
+///
+/// | key | dtype, shape | meaning |
+/// |---|---|---|
+/// | `levels` | int64 `(L+1,)` | vertex count of each level, level 0 first |
+/// | `F{k}` | int32 `(faces_k, 3)` | faces of level k, in level-k vertex indices |
+/// | `A{k}_row/_col/_data/_shape` | int32, int32, float64, int64 `(2,)` | adjacency of level k (COO) |
+/// | `D{k}_…` (k < L) | COO, shape `(n_{k+1}, n_k)` | selection: one 1 per row at `map{k+1}` |
+/// | `U{k}_…` (k < L) | COO, shape `(n_k, n_{k+1})` | upsampler, rows summing to 1 |
+/// | `map{k+1}` (k < L) | int32 `(n_{k+1},)` | each level-(k+1) vertex as a level-k vertex |
+/// | `orig{k+1}` (k < L) | int32 `(n_{k+1},)` | each level-(k+1) vertex as a level-0 vertex |
+///
+/// GraphCMR's conventions: `D{k} · V_k = V_{k+1}` and `U{k} · V_{k+1} ≈ V_k`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HierarchyArrays {
+    pub levels: Vec<usize>,
+    /// `faces[k]`, level k.
+    pub faces: Vec<Vec<[u32; 3]>>,
+    /// `adjacency[k]`, level k.
+    pub adjacency: Vec<CooArrays>,
+    /// `down[k]`, `up[k]`, `map[k]`, `orig[k]`: the step k → k+1 (so `map[k]` is `map{k+1}`).
+    pub down: Vec<CooArrays>,
+    pub up: Vec<CooArrays>,
+    pub map: Vec<Vec<u32>>,
+    pub orig: Vec<Vec<u32>>,
+}
+
+impl HierarchyArrays {
+    /// The named arrays in key order: `levels`, then per level `F`, `A`, then per step
+    /// `D`, `U`, `map`, `orig`. Errors when the per-level lists have inconsistent lengths
+    /// or an index does not fit int32.
+    pub fn to_arrays(&self) -> Result<Vec<NamedArray>, String> {
+        let l = self.levels.len().checked_sub(1).ok_or("a hierarchy needs at least level 0")?;
+        let lists = [self.faces.len(), self.adjacency.len()];
+        let steps = [self.down.len(), self.up.len(), self.map.len(), self.orig.len()];
+        if lists.iter().any(|&n| n != l + 1) || steps.iter().any(|&n| n != l) {
+            return Err(format!(
+                "{} levels but per-level lists {lists:?} and per-step lists {steps:?}",
+                l + 1
+            ));
+        }
+        let mut out = vec![(
+            "levels".to_owned(),
+            NpyArray::vector(NpyData::I64(self.levels.iter().map(|&n| n as i64).collect())),
+        )];
+        for k in 0..=l {
+            let faces = int32(self.faces[k].iter().flatten().copied(), &format!("F{k}"))?;
+            out.push((format!("F{k}"), NpyArray { shape: vec![self.faces[k].len(), 3], data: faces }));
+            push_coo(&mut out, &format!("A{k}"), &self.adjacency[k])?;
+        }
+        for k in 0..l {
+            push_coo(&mut out, &format!("D{k}"), &self.down[k])?;
+            push_coo(&mut out, &format!("U{k}"), &self.up[k])?;
+            let map = int32(self.map[k].iter().copied(), "map")?;
+            out.push((format!("map{}", k + 1), NpyArray::vector(map)));
+            let orig = int32(self.orig[k].iter().copied(), "orig")?;
+            out.push((format!("orig{}", k + 1), NpyArray::vector(orig)));
+        }
+        Ok(out)
+    }
+
+    /// The inverse of [`HierarchyArrays::to_arrays`]: looks every key up by name, checks
+    /// dtypes and shapes.
+    pub fn from_arrays(arrays: &[NamedArray]) -> Result<Self, String> {
+        let get = |key: &str| {
+            arrays.iter().find(|(n, _)| n == key).map(|(_, a)| a).ok_or(format!("no array '{key}'"))
+        };
+        let levels: Vec<usize> = match &get("levels")?.data {
+            NpyData::I64(v) => {
+                v.iter().map(|&n| usize::try_from(n).map_err(|_| "negative level".to_owned())).collect()
+            }
+            _ => Err("'levels' is not int64".to_owned()),
+        }?;
+        let l = levels.len().checked_sub(1).ok_or("'levels' is empty")?;
+        let mut h = HierarchyArrays {
+            levels,
+            faces: Vec::new(),
+            adjacency: Vec::new(),
+            down: Vec::new(),
+            up: Vec::new(),
+            map: Vec::new(),
+            orig: Vec::new(),
+        };
+        for k in 0..=l {
+            let f = get(&format!("F{k}"))?;
+            let flat = uint32(&f.data, &format!("F{k}"))?;
+            if f.shape.len() != 2 || f.shape[1] != 3 {
+                return Err(format!("F{k} has shape {:?}, not (faces, 3)", f.shape));
+            }
+            h.faces.push(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect());
+            h.adjacency.push(read_coo(&get, &format!("A{k}"))?);
+        }
+        for k in 0..l {
+            h.down.push(read_coo(&get, &format!("D{k}"))?);
+            h.up.push(read_coo(&get, &format!("U{k}"))?);
+            h.map.push(uint32(&get(&format!("map{}", k + 1))?.data, "map")?);
+            h.orig.push(uint32(&get(&format!("orig{}", k + 1))?.data, "orig")?);
+        }
+        Ok(h)
+    }
+}
+
+/// Writes `hierarchy` to `path` as npz, atomically.
+pub fn write_hierarchy_npz(path: &Path, hierarchy: &HierarchyArrays) -> Result<(), IoError> {
+    let arrays = hierarchy.to_arrays().map_err(|reason| invalid(path, reason))?;
+    write_npz(path, &arrays)
+}
+
+/// Reads a `hierarchy.npz` (for tests and `desal inspect`).
+pub fn read_hierarchy_npz(path: &Path) -> Result<HierarchyArrays, IoError> {
+    let arrays = read_npz(path)?;
+    HierarchyArrays::from_arrays(&arrays).map_err(|reason| invalid(path, reason))
+}
+
+fn int32(values: impl Iterator<Item = u32>, what: &str) -> Result<NpyData, String> {
+    values
+        .map(|v| i32::try_from(v).map_err(|_| format!("{what}: index {v} does not fit int32")))
+        .collect::<Result<Vec<_>, _>>()
+        .map(NpyData::I32)
+}
+
+fn uint32(data: &NpyData, what: &str) -> Result<Vec<u32>, String> {
+    match data {
+        NpyData::I32(v) => {
+            v.iter().map(|&x| u32::try_from(x).map_err(|_| format!("{what}: negative index {x}"))).collect()
+        }
+        _ => Err(format!("{what} is not int32")),
+    }
+}
+
+fn push_coo(out: &mut Vec<NamedArray>, key: &str, coo: &CooArrays) -> Result<(), String> {
+    if coo.row.len() != coo.data.len() || coo.col.len() != coo.data.len() {
+        return Err(format!("{key}: row, col and data lengths differ"));
+    }
+    out.push((format!("{key}_row"), NpyArray::vector(int32(coo.row.iter().copied(), key)?)));
+    out.push((format!("{key}_col"), NpyArray::vector(int32(coo.col.iter().copied(), key)?)));
+    out.push((format!("{key}_data"), NpyArray::vector(NpyData::F64(coo.data.clone()))));
+    let shape = NpyData::I64(coo.shape.iter().map(|&n| n as i64).collect());
+    out.push((format!("{key}_shape"), NpyArray::vector(shape)));
+    Ok(())
+}
+
+fn read_coo<'a>(get: &impl Fn(&str) -> Result<&'a NpyArray, String>, key: &str) -> Result<CooArrays, String> {
+    let row = uint32(&get(&format!("{key}_row"))?.data, key)?;
+    let col = uint32(&get(&format!("{key}_col"))?.data, key)?;
+    let NpyData::F64(data) = &get(&format!("{key}_data"))?.data else {
+        return Err(format!("{key}_data is not float64"));
+    };
+    let NpyData::I64(shape) = &get(&format!("{key}_shape"))?.data else {
+        return Err(format!("{key}_shape is not int64"));
+    };
+    let [rows, cols] = shape[..] else { return Err(format!("{key}_shape does not have 2 entries")) };
+    let (rows, cols) = (usize::try_from(rows), usize::try_from(cols));
+    let (Ok(rows), Ok(cols)) = (rows, cols) else { return Err(format!("{key}_shape is negative")) };
+    if row.len() != data.len() || col.len() != data.len() {
+        return Err(format!("{key}: row, col and data lengths differ"));
+    }
+    if row.iter().any(|&r| r as usize >= rows) || col.iter().any(|&c| c as usize >= cols) {
+        return Err(format!("{key}: an index lies outside the shape ({rows}, {cols})"));
+    }
+    Ok(CooArrays { shape: [rows, cols], row, col, data: data.clone() })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> Vec<NamedArray> {
+        vec![
+            ("a".into(), NpyArray { shape: vec![2, 3], data: NpyData::I32(vec![1, -2, 3, 4, 5, i32::MAX]) }),
+            ("b".into(), NpyArray::vector(NpyData::F64(vec![0.1, -0.0, f64::MAX, 1e-300]))),
+            ("c".into(), NpyArray::vector(NpyData::I64(vec![]))),
+        ]
+    }
+
+    /// Write then read gives the same arrays, bit for bit.
+    #[test]
+    fn round_trip() {
+        let bytes = encode_npz(&sample()).unwrap();
+        assert_eq!(decode_npz(&bytes).unwrap(), sample());
+    }
+
+    /// Every npy header pads the data to a 64-byte boundary, like numpy's.
+    #[test]
+    fn npy_data_is_64_byte_aligned() {
+        for (_, a) in sample() {
+            let npy = encode_npy(&a).unwrap();
+            let header_len = u16::from_le_bytes([npy[8], npy[9]]) as usize;
+            assert_eq!((10 + header_len) % 64, 0);
+            assert_eq!(npy[10 + header_len - 1], b'\n');
+        }
+    }
+
+    /// Any truncation is an error, never a panic or an oversized allocation.
+    #[test]
+    fn truncated_files_are_refused() {
+        let bytes = encode_npz(&sample()).unwrap();
+        for len in 0..bytes.len() {
+            assert!(decode_npz(&bytes[..len]).is_err(), "truncated to {len} bytes");
+        }
+    }
+
+    /// A flipped payload byte fails the CRC; a forged huge size is bounded by the file.
+    #[test]
+    fn corruption_is_refused() {
+        let mut bytes = encode_npz(&sample()).unwrap();
+        let last_data = bytes.len() - END_LEN - 200;
+        bytes[last_data] ^= 1;
+        assert!(decode_npz(&bytes).is_err());
+        let mut forged = encode_npz(&sample()).unwrap();
+        let central =
+            u32::from_le_bytes(forged[forged.len() - 6..forged.len() - 2].try_into().unwrap()) as usize;
+        forged[central + 20..central + 28].copy_from_slice(&[0xff; 8]);
+        let err = decode_npz(&forged).unwrap_err();
+        assert!(err.contains("past the end"), "{err}");
+    }
+
+    /// A shape that does not match the data is refused at write time.
+    #[test]
+    fn shape_mismatch_is_refused() {
+        let bad = vec![("x".to_owned(), NpyArray { shape: vec![4], data: NpyData::I32(vec![1, 2]) })];
+        assert!(encode_npz(&bad).is_err());
+    }
+
+    /// The hierarchy layout round-trips through its arrays.
+    #[test]
+    fn hierarchy_round_trip() {
+        let coo = |rows, cols| CooArrays {
+            shape: [rows, cols],
+            row: vec![0, 1],
+            col: vec![1, 0],
+            data: vec![0.5, 1.0],
+        };
+        let h = HierarchyArrays {
+            levels: vec![4, 2],
+            faces: vec![vec![[0, 1, 2], [0, 2, 3]], vec![[0, 1, 1]]],
+            adjacency: vec![coo(4, 4), coo(2, 2)],
+            down: vec![coo(2, 4)],
+            up: vec![coo(4, 2)],
+            map: vec![vec![3, 1]],
+            orig: vec![vec![3, 1]],
+        };
+        let arrays = h.to_arrays().unwrap();
+        assert_eq!(HierarchyArrays::from_arrays(&arrays).unwrap(), h);
+        let names: Vec<&str> = arrays.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(&names[..4], ["levels", "F0", "A0_row", "A0_col"]);
+        assert!(names.contains(&"map1") && names.contains(&"orig1") && names.contains(&"U0_shape"));
+    }
+}
