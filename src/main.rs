@@ -102,9 +102,19 @@ fn run(cli: Cli) -> Result<()> {
         Command::Map(args) => desal::cli::map(&args),
         Command::Eval(args) => desal::evaluate::eval(&args),
         Command::Inspect { files } => {
-            for file in files {
-                print!("{}", desal::inspect::describe(&file)?);
+            // Every file is described or its error printed; the exit code says whether
+            // any failed.
+            let mut failed = 0;
+            for file in &files {
+                match desal::inspect::describe(file) {
+                    Ok(text) => print!("{text}"),
+                    Err(e) => {
+                        desal::report_error(&e);
+                        failed += 1;
+                    }
+                }
             }
+            anyhow::ensure!(failed == 0, "{failed} of {} files could not be inspected", files.len());
             Ok(())
         }
     }

@@ -29,6 +29,12 @@ pub fn key(poses: ContentHash, simplified: ContentHash) -> StageKey {
 /// desal's own and the peers' simplifications at SCAPE's 2500 vertices are at 0.2 %.
 const MAX_MEAN_DISPLACEMENT: f64 = 0.05;
 
+/// The same guard in units of the template's mean edge length, which catches a
+/// simplification of another pose of the same body (a limb moved by centimetres is far
+/// under 5 % of the diagonal but many edges away): desal's and the peers'
+/// simplifications sit at a fraction of an edge (the sample at 2500 vertices: a quarter).
+const MAX_DISPLACEMENT_EDGES: f64 = 4.0;
+
 /// Refuses a stage-3 result made from another pose set: its input vertex count and the
 /// exact positions of its kept original vertices must be the template's.
 fn check_made_from(simplified: &SimplifiedV1, set: &PoseSet) -> Result<()> {
@@ -77,14 +83,18 @@ pub fn map(simplified: &SimplifiedV1, set: &PoseSet, labels: &PartLabels) -> Res
     let r = &out.report;
     let diagonal =
         desal_mesh::math::bounding_box(set.template_positions()).map_or(0.0, |(lo, hi)| (hi - lo).norm());
-    if r.displacement.mean > MAX_MEAN_DISPLACEMENT * diagonal {
+    let (edge_length, _) = set.template_mesh().edge_length_stats();
+    if r.displacement.mean > MAX_MEAN_DISPLACEMENT * diagonal
+        || r.displacement.mean > MAX_DISPLACEMENT_EDGES * edge_length
+    {
         bail!(
             "the simplified mesh does not lie on this template: its vertices are {:.3e} from their \
-             mapped original vertices on average ({:.1} % of the template's diagonal; a simplification \
-             of it is within a fraction of a percent) — is it a simplification of this template, in \
-             the same units and pose?",
+             mapped original vertices on average ({:.1} % of the template's diagonal, {:.1} of its mean \
+             edge lengths; a simplification of it is within a fraction of an edge) — is it a \
+             simplification of this template, in the same units and pose?",
             r.displacement.mean,
-            100.0 * r.displacement.mean / diagonal
+            100.0 * r.displacement.mean / diagonal,
+            r.displacement.mean / edge_length
         );
     }
     Ok(out)
