@@ -95,8 +95,20 @@ fn check_part_ids(
     let bad = |k: usize, reason: String| IoError::BadLine { path: path.to_owned(), line: lines[k], reason };
     if let Some(count) = names.iter().map(|(id, _)| *id as usize + 1).max() {
         if count > labels.len() {
-            let (id, name) = names.iter().max_by_key(|(id, _)| *id).expect("a named part");
-            return Err(IoError::EmptyPart { path: path.to_owned(), part: *id, name: name.clone() });
+            // More parts than vertices: one of the first `len + 1` parts is empty.
+            let mut used = vec![false; labels.len() + 1];
+            for &id in labels {
+                if let Some(slot) = used.get_mut(id as usize) {
+                    *slot = true;
+                }
+            }
+            let part = used.iter().position(|&u| !u).expect("more parts than vertices") as u32;
+            let name = names
+                .iter()
+                .rev()
+                .find(|(id, _)| *id == part)
+                .map_or(format!("part{part}"), |(_, n)| n.clone());
+            return Err(IoError::EmptyPart { path: path.to_owned(), part, name });
         }
         if let Some(k) = labels.iter().position(|&id| id as usize >= count) {
             return Err(bad(
