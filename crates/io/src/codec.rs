@@ -15,9 +15,11 @@
 //! no allocation can exceed the limit. An honest payload costs at most
 //! [`CLAIM_FACTOR`] bytes of budget per payload byte (the widest in-memory value per
 //! encoded byte is an 8-byte integer read from a 1-byte varint), so the limit is the
-//! smallest power of two at or above `CLAIM_FACTOR × len + MIN_BUDGET`: never refusing an
-//! honest payload, never allocating more than 16× the payload for a forged one. The
-//! limit is a const generic in bincode 2, hence one instantiation per power of two.
+//! smallest power of four at or above `CLAIM_FACTOR × len + MIN_BUDGET`: never refusing
+//! an honest payload, never allocating more than 32× the payload (plus 256 bytes) for a
+//! forged one. The limit is a const generic in bincode 2, so every rung is one more
+//! instantiation of every artifact decoder: powers of four (17 rungs, 4 KiB to 16 TiB)
+//! rather than of two halve that compile cost for a factor of 2 in the bound.
 //! Sequences need no limit of their own: serde pre-allocates at most 1 MiB per sequence
 //! whatever its prefix claims, and growing past that needs real elements.
 //! The format is unchanged by the limit (it is a decoder-side check only).
@@ -39,7 +41,9 @@ pub fn encode<T: Serialize>(value: &T) -> Vec<u8> {
 /// Allocations are bounded by a limit derived from `bytes.len()` (see the module doc).
 pub fn decode_prefix<T: DeserializeOwned>(bytes: &[u8]) -> Result<(T, usize), String> {
     let budget = bytes.len().saturating_mul(CLAIM_FACTOR).saturating_add(MIN_BUDGET);
+    // log2 of the smallest power of four >= budget, at least 4 KiB.
     let rung = budget.checked_next_power_of_two().map_or(u32::MAX, usize::trailing_zeros).max(12);
+    let rung = rung.saturating_add(rung % 2);
     macro_rules! decode_at_rung {
         ($($k:literal)*) => {
             match rung {
@@ -48,7 +52,7 @@ pub fn decode_prefix<T: DeserializeOwned>(bytes: &[u8]) -> Result<(T, usize), St
             }
         };
     }
-    decode_at_rung!(12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32 33 34 35 36 37 38 39 40 41 42 43 44)
+    decode_at_rung!(12 14 16 18 20 22 24 26 28 30 32 34 36 38 40 42 44)
 }
 
 /// Decodes exactly one `T` from `bytes`; trailing bytes are an error.
