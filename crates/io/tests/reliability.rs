@@ -459,3 +459,17 @@ fn d17_fifo_directory_and_device_are_refused_without_hanging() {
         assert!(matches!(err, IoError::NotAFile { what: "a device", .. }), "{err}");
     }
 }
+
+/// The part check now uses the fit's threshold (1e-9 of the covariance's eigenvalues,
+/// not 1e-18): real bodies still pass it, every part of the sample and of SCAPE.
+#[test]
+fn d15_real_parts_pass_the_fit_threshold() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data-samples");
+    let template = read_mesh(&root.join("poses/00_rest.ply")).unwrap();
+    for file in ["labels.txt", "labels.json"] {
+        let labels = desal_io::labels::read_labels(&root.join(file)).unwrap();
+        labels.check_parts_fittable(&template.positions).unwrap();
+    }
+    let Some((set, labels)) = desal_testdata::scape() else { return };
+    labels.check_parts_fittable(set.template_positions()).unwrap();
+}
