@@ -228,6 +228,11 @@ fn d9_decodable_but_inconsistent_bodies_are_refused() {
     refused(&poses, "names has 1 entries, but there are 2 poses");
     let poses = PoseSetV1 { names: vec!["a".into(), "b".into()], template: 5, ..poses };
     refused(&poses, "template index 5");
+    // Empty: `to_pose_set` would refuse it without the path.
+    refused(
+        &PoseSetV1 { template: 0, faces: vec![], ..poses },
+        "the pose set is empty (3 vertices, 0 faces)",
+    );
     refused(&LabelsV1 { names: vec!["a".into()], labels: vec![0, 1] }, "vertex 1 has part id 1");
     let fit = FitV1 {
         model: "rigid".into(),

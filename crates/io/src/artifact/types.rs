@@ -32,6 +32,9 @@ impl ArtifactBody for PoseSetV1 {
             return Err(format!("template index {} is out of range for {poses} poses", self.template));
         }
         let vertices = self.positions[self.template as usize].len();
+        if vertices == 0 || self.faces.is_empty() {
+            return Err(format!("the pose set is empty ({vertices} vertices, {} faces)", self.faces.len()));
+        }
         for (pose, p) in self.positions.iter().enumerate() {
             expect_len(&format!("positions of pose {pose}"), p.len(), "template vertices", vertices)?;
             if let Some(v) = p.iter().position(|q| !q.iter().all(|c| c.is_finite())) {
