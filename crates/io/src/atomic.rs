@@ -48,7 +48,7 @@ pub fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<(), IoE
 
 /// Reads JSON from `path` into `T`.
 pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, IoError> {
-    let bytes = fs::read(path).map_err(|e| IoError::io(path, e))?;
+    let bytes = crate::file::read_regular_file(path)?;
     serde_json::from_slice(&bytes).map_err(|e| IoError::Json { path: path.to_owned(), reason: e.to_string() })
 }
 

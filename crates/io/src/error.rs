@@ -15,6 +15,15 @@ pub enum IoError {
     #[error("{path}: {cause}")]
     Io { path: PathBuf, cause: std::io::Error },
 
+    /// The path is a directory, FIFO, socket or device: refused before opening, since
+    /// opening a FIFO would block until a writer appears.
+    #[error("{path}: is {what}, not a regular file; desal reads regular files only")]
+    NotAFile { path: PathBuf, what: &'static str },
+
+    /// A text format (OBJ, OFF, ASCII labels, JSON) holds bytes that are not UTF-8.
+    #[error("{path}: not a text file: invalid UTF-8 at byte {offset}")]
+    NotText { path: PathBuf, offset: usize },
+
     /// The extension is not one desal reads.
     #[error("{path}: unsupported mesh format '.{extension}' (desal reads .ply, .obj and .off)")]
     UnsupportedFormat { path: PathBuf, extension: String },
@@ -87,6 +96,18 @@ pub enum IoError {
     /// The payload passed its checksum but does not decode (a bug, or a forged header).
     #[error("{path}: artifact payload does not decode: {reason}")]
     Decode { path: PathBuf, reason: String },
+
+    /// A part of a labels file has no vertex (see `labels`' module doc for the rule).
+    #[error(
+        "{path}: part {part} ('{name}') has no vertices; every part needs at least 3 non-collinear vertices for its rigid fit — label vertices with it, or remove it and renumber the parts after it"
+    )]
+    EmptyPart { path: PathBuf, part: u32, name: String },
+
+    /// The payload decoded, but its content contradicts itself (an index out of range,
+    /// arrays of disagreeing lengths): a forged or corrupt file whose checksum was
+    /// recomputed, or a bug in the desal that wrote it.
+    #[error("{path}: '{kind}' artifact is inconsistent: {reason}; delete it and re-run the stage")]
+    InvalidArtifact { path: PathBuf, kind: &'static str, reason: String },
 
     /// JSON could not be read or written.
     #[error("{path}: {reason}")]

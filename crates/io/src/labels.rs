@@ -1,5 +1,13 @@
 //! Part label files: plain text (one integer part id per vertex, `#` comment lines, as
 //! in SCAPE's `vertex_part_labels_16.txt`) or JSON (`{"parts": [names], "labels": [ids]}`).
+//!
+//! **One rule for both forms:** the parts are `0..N`, N being the length of the JSON
+//! `parts` list, or for text the parts a `# ids: 0=name, 1=name` comment names (its
+//! largest id + 1), else the largest id + 1; and **every part has at least one vertex**.
+//! An empty part — trailing or not, named or not — is refused by both readers with
+//! [`IoError::EmptyPart`], naming it: stage 1 needs at least three non-collinear
+//! vertices per part (checked at ingest against the template), so an empty part could
+//! never be used, and dropping it silently would renumber nothing but hide a mistake.
 
 use std::path::Path;
 
@@ -14,17 +22,37 @@ struct LabelsJson {
     labels: Vec<u32>,
 }
 
-/// Reads part labels; `.json` files are JSON, anything else is the text form. Text
-/// labels get names from a `# ids: 0=name, 1=name` comment when present, else
-/// `part0`, `part1`, ...
+/// Reads part labels (a regular file only); `.json` files are JSON, anything else is the
+/// text form. Text labels get names from a `# ids: 0=name, 1=name` comment when present,
+/// else `part0`, `part1`, ... See the module doc for the rule on parts.
 pub fn read_labels(path: &Path) -> Result<PartLabels, IoError> {
-    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
-    if crate::extension(path) == "json" {
-        let parsed: LabelsJson = serde_json::from_str(&text)
+    read_labels_from(path, &crate::file::read_regular_file(path)?)
+}
+
+/// Parses label file content, JSON when `path` ends in `.json`, else text; `path` is
+/// for messages only.
+pub fn read_labels_from(path: &Path, bytes: &[u8]) -> Result<PartLabels, IoError> {
+    let labels = if crate::extension(path) == "json" {
+        let parsed: LabelsJson = serde_json::from_slice(bytes)
             .map_err(|e| IoError::Json { path: path.to_owned(), reason: e.to_string() })?;
-        return PartLabels::try_new(parsed.labels, parsed.parts)
-            .map_err(|cause| IoError::InvalidMesh { path: path.to_owned(), cause });
+        PartLabels::try_new(parsed.labels, parsed.parts)
+            .map_err(|cause| IoError::InvalidMesh { path: path.to_owned(), cause })?
+    } else {
+        let text = std::str::from_utf8(bytes)
+            .map_err(|e| IoError::NotText { path: path.to_owned(), offset: e.valid_up_to() })?;
+        parse_text(path, text)?
+    };
+    if let Some(part) = labels.first_empty_part() {
+        return Err(IoError::EmptyPart {
+            path: path.to_owned(),
+            part,
+            name: labels.names[part as usize].clone(),
+        });
     }
+    Ok(labels)
+}
+
+fn parse_text(path: &Path, text: &str) -> Result<PartLabels, IoError> {
     let mut labels = Vec::new();
     let mut lines = Vec::new();
     let mut names: Vec<(u32, String)> = Vec::new();
@@ -45,27 +73,43 @@ pub fn read_labels(path: &Path) -> Result<PartLabels, IoError> {
         labels.push(id);
         lines.push(i + 1);
     }
-    check_part_ids(path, &labels, &lines, &names)?;
-    let mut result = PartLabels::from_ids(labels);
+    let part_count = check_part_ids(path, &labels, &lines, &names)?;
+    let mut part_names: Vec<String> = (0..part_count).map(|k| format!("part{k}")).collect();
     for (id, name) in names {
-        if let Some(slot) = result.names.get_mut(id as usize) {
-            *slot = name;
-        }
+        part_names[id as usize] = name;
     }
-    Ok(result)
+    Ok(PartLabels::try_new(labels, part_names).expect("ids were checked against the part count"))
 }
 
-/// Text labels carry no part count, so it is inferred: the parts named in a `# ids:`
-/// comment, else `0..=max id` with every id in use. An id outside that range is a typo
-/// (or a foreign file) and is reported with its line, before anything is allocated for it.
+/// Text labels carry no part count, so it is inferred and returned: the parts named in a
+/// `# ids:` comment, else `0..=max id` with every id in use. An id outside that range is
+/// a typo (or a foreign file) and is reported with its line, before anything is
+/// allocated for it. A comment naming more parts than there are vertices names an
+/// empty part, refused (by id) before its names are allocated.
 fn check_part_ids(
     path: &Path,
     labels: &[u32],
     lines: &[usize],
     names: &[(u32, String)],
-) -> Result<(), IoError> {
+) -> Result<usize, IoError> {
     let bad = |k: usize, reason: String| IoError::BadLine { path: path.to_owned(), line: lines[k], reason };
     if let Some(count) = names.iter().map(|(id, _)| *id as usize + 1).max() {
+        if count > labels.len() {
+            // More parts than vertices: one of the first `len + 1` parts is empty.
+            let mut used = vec![false; labels.len() + 1];
+            for &id in labels {
+                if let Some(slot) = used.get_mut(id as usize) {
+                    *slot = true;
+                }
+            }
+            let part = used.iter().position(|&u| !u).expect("more parts than vertices") as u32;
+            let name = names
+                .iter()
+                .rev()
+                .find(|(id, _)| *id == part)
+                .map_or(format!("part{part}"), |(_, n)| n.clone());
+            return Err(IoError::EmptyPart { path: path.to_owned(), part, name });
+        }
         if let Some(k) = labels.iter().position(|&id| id as usize >= count) {
             return Err(bad(
                 k,
@@ -76,7 +120,7 @@ fn check_part_ids(
                 ),
             ));
         }
-        return Ok(());
+        return Ok(count);
     }
     let mut used: Vec<u32> = labels.to_vec();
     used.sort_unstable();
@@ -87,13 +131,13 @@ fn check_part_ids(
             k,
             format!(
                 "vertex {k} has part id {}, but no vertex has part id {gap}: part ids must be 0..N-1 \
-                 with every id used (name the parts in a '# ids: 0=name, 1=name' comment to allow \
-                 empty ones)",
+                 with every part used (each part needs at least 3 non-collinear vertices for its \
+                 rigid fit); renumber the parts without the gap",
                 labels[k]
             ),
         ));
     }
-    Ok(())
+    Ok(used.len())
 }
 
 /// Names from a comment like ` ids: 0=lefthand, 1=leftlowerarm`.

@@ -11,6 +11,7 @@ pub mod atomic;
 pub mod codec;
 pub mod dir;
 pub mod error;
+pub mod file;
 pub mod labels;
 pub mod npz;
 pub mod obj;
@@ -28,14 +29,41 @@ use desal_mesh::TriMesh;
 
 /// Reads a triangle mesh from a PLY (ASCII or binary), OBJ or ASCII OFF file, chosen by
 /// extension.
-/// Polygons are fan-triangulated; vertex order is kept. Validates face index ranges and
-/// finite coordinates.
+/// Polygons are fan-triangulated; vertex order is kept. Validates face index ranges (by
+/// the file's own face numbers) and finite coordinates. Anything but a regular file is
+/// refused before it is opened (a FIFO would block).
 pub fn read_mesh(path: &Path) -> Result<TriMesh, IoError> {
+    let format = mesh_format(path)?;
+    read_mesh_bytes(path, format, &file::read_regular_file(path)?)
+}
+
+/// Parses the mesh file content `bytes`, in the format `path`'s extension names; `path`
+/// is for messages only. What [`read_mesh`] does after reading the file.
+pub fn read_mesh_from(path: &Path, bytes: &[u8]) -> Result<TriMesh, IoError> {
+    read_mesh_bytes(path, mesh_format(path)?, bytes)
+}
+
+#[derive(Clone, Copy)]
+enum MeshFormat {
+    Ply,
+    Obj,
+    Off,
+}
+
+fn mesh_format(path: &Path) -> Result<MeshFormat, IoError> {
     match extension(path).as_str() {
-        "ply" => ply::read_ply(path),
-        "obj" => obj::read_obj(path),
-        "off" => off::read_off(path),
+        "ply" => Ok(MeshFormat::Ply),
+        "obj" => Ok(MeshFormat::Obj),
+        "off" => Ok(MeshFormat::Off),
         other => Err(IoError::UnsupportedFormat { path: path.to_owned(), extension: other.to_owned() }),
+    }
+}
+
+fn read_mesh_bytes(path: &Path, format: MeshFormat, bytes: &[u8]) -> Result<TriMesh, IoError> {
+    match format {
+        MeshFormat::Ply => ply::read_ply_from(path, bytes).map(|m| m.mesh),
+        MeshFormat::Obj => obj::read_obj_from(path, bytes),
+        MeshFormat::Off => off::read_off_from(path, bytes),
     }
 }
 

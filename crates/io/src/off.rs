@@ -10,9 +10,19 @@ use desal_mesh::{Face, TriMesh, Vec3};
 
 use crate::error::IoError;
 
-/// Reads an ASCII OFF file.
+/// Reads an ASCII OFF file (a regular file only).
 pub fn read_off(path: &Path) -> Result<TriMesh, IoError> {
-    let text = std::fs::read_to_string(path).map_err(|e| IoError::io(path, e))?;
+    read_off_from(path, &crate::file::read_regular_file(path)?)
+}
+
+/// Parses ASCII OFF content; `path` is for messages only.
+///
+/// The header's counts are checked against the number of tokens the file holds before
+/// anything is allocated for them: a vertex takes 3 numbers and a face at least 4, so a
+/// header claiming more than the file can hold is refused, naming the element.
+pub fn read_off_from(path: &Path, bytes: &[u8]) -> Result<TriMesh, IoError> {
+    let text = std::str::from_utf8(bytes)
+        .map_err(|e| IoError::NotText { path: path.to_owned(), offset: e.valid_up_to() })?;
     // (line number, token), comments removed.
     let tokens: Vec<(usize, &str)> = text
         .lines()
@@ -47,6 +57,7 @@ pub fn read_off(path: &Path) -> Result<TriMesh, IoError> {
         *slot = t.parse().map_err(|_| bad(line, format!("{what} '{t}' is not a count")))?;
     }
     let [vertex_count, face_count, _] = counts;
+    check_counts(path, vertex_count, face_count, tokens.len() - at)?;
     let mut positions = Vec::with_capacity(vertex_count);
     for v in 0..vertex_count {
         let mut c = [0.0f64; 3];
@@ -67,7 +78,15 @@ pub fn read_off(path: &Path) -> Result<TriMesh, IoError> {
         corners.clear();
         for _ in 0..n {
             let (line, t) = next(&mut at, &format!("corners of face {f}"))?;
-            corners.push(t.parse().map_err(|_| bad(line, format!("face {f}: '{t}' is not a vertex index")))?);
+            let v: u32 =
+                t.parse().map_err(|_| bad(line, format!("face {f}: '{t}' is not a vertex index")))?;
+            if v as usize >= vertex_count {
+                return Err(bad(
+                    line,
+                    format!("face {f} references vertex {v}, but the file has only {vertex_count} vertices"),
+                ));
+            }
+            corners.push(v);
         }
         for k in 1..n - 1 {
             faces.push([corners[0], corners[k], corners[k + 1]]);
@@ -86,4 +105,33 @@ pub fn read_off(path: &Path) -> Result<TriMesh, IoError> {
     }
     TriMesh::try_new(positions, faces, &path.display().to_string())
         .map_err(|cause| IoError::InvalidMesh { path: path.to_owned(), cause })
+}
+
+/// Refuses header counts that need more numbers than the `available` tokens after the
+/// header: 3 per vertex, at least 4 (a corner count and 3 corners) per face.
+fn check_counts(
+    path: &Path,
+    vertex_count: usize,
+    face_count: usize,
+    available: usize,
+) -> Result<(), IoError> {
+    let too_many = |element: &str, count: usize, per: &str, needed: Option<usize>| {
+        let needed = needed.map_or_else(|| "more than 2^64".to_owned(), |n| n.to_string());
+        IoError::bad_mesh(
+            path,
+            format!(
+                "the header announces {count} {element} ({per}), which needs {needed} numbers, but the file holds only {available} after the header: the counts are wrong or the file is truncated"
+            ),
+        )
+    };
+    let vertex_numbers = vertex_count.checked_mul(3);
+    if vertex_numbers.is_none_or(|n| n > available) {
+        return Err(too_many("vertices", vertex_count, "3 numbers each", vertex_numbers));
+    }
+    let face_numbers = face_count.checked_mul(4);
+    let all = face_numbers.and_then(|n| n.checked_add(vertex_count * 3));
+    if all.is_none_or(|n| n > available) {
+        return Err(too_many("faces", face_count, "at least 4 numbers each, after the vertices", all));
+    }
+    Ok(())
 }

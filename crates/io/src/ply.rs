@@ -5,8 +5,7 @@
 //! keep coordinates in fixed fields), not the crate's per-element hash maps, so a
 //! million-vertex mesh reads without a map per vertex.
 
-use std::fs::File;
-use std::io::{BufRead, BufReader, Write};
+use std::io::{BufRead, Write};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -53,25 +52,37 @@ pub struct PlyMesh {
     pub scalars: Vec<(String, Vec<f32>)>,
 }
 
-/// Reads a PLY mesh (any encoding). Polygons are fan-triangulated.
+/// Reads a PLY mesh (any encoding; a regular file only). Polygons are fan-triangulated.
 pub fn read_ply(path: &Path) -> Result<TriMesh, IoError> {
     Ok(read_ply_full(path)?.mesh)
 }
 
-/// Reads a PLY mesh and its extra scalar vertex properties.
+/// Reads a PLY mesh and its extra scalar vertex properties (a regular file only).
 pub fn read_ply_full(path: &Path) -> Result<PlyMesh, IoError> {
-    let file = File::open(path).map_err(|e| IoError::io(path, e))?;
-    let mut reader = Reader::new(BufReader::with_capacity(1 << 20, file));
+    read_ply_from(path, &crate::file::read_regular_file(path)?)
+}
+
+/// Parses PLY content (any encoding); `path` is for messages only.
+///
+/// Stricter than the PLY crate underneath, because a lenient reader turns a damaged or
+/// hand-edited file into a silently wrong mesh:
+/// - only `format … 1.0`; no element or property name twice (the crate would merge
+///   them and misread every value after);
+/// - every element count is checked against the bytes after the header before anything
+///   is read (a binary element takes at least the sizes of its scalars and list counts,
+///   an ASCII element at least a number and a separator per property);
+/// - an ASCII element line must hold exactly the values its properties declare;
+/// - the vertex element needs scalar `x`, `y`, `z`, the face element an integer list
+///   named `vertex_indices` (or `vertex_index`);
+/// - face numbers in messages are the file's own, counted before triangulation.
+pub fn read_ply_from(path: &Path, bytes: &[u8]) -> Result<PlyMesh, IoError> {
+    let mut reader = Reader::new(std::io::Cursor::new(bytes));
     let header = Parser::<SkipElement>::new()
         .read_header(&mut reader)
         .map_err(|e| IoError::bad_mesh(path, format!("bad PLY header: {e}")))?;
-    let vertex_def =
-        header.elements.get("vertex").ok_or_else(|| IoError::bad_mesh(path, "no 'vertex' element"))?;
-    for axis in ["x", "y", "z"] {
-        if !vertex_def.properties.contains_key(axis) {
-            return Err(IoError::bad_mesh(path, format!("the vertex element has no '{axis}' property")));
-        }
-    }
+    let header_len = reader.get_ref().position() as usize;
+    check_header(path, &header, &bytes[..header_len], bytes.len() - header_len)?;
+    let vertex_def = &header.elements["vertex"];
     let extra_names: Vec<String> = vertex_def
         .properties
         .iter()
@@ -82,65 +93,13 @@ pub fn read_ply_full(path: &Path) -> Result<PlyMesh, IoError> {
         .take(MAX_EXTRA)
         .collect();
 
-    let mut vertices: Vec<VertexIn> = Vec::new();
-    let mut polygons: Vec<FaceIn> = Vec::new();
-    for (name, def) in &header.elements {
-        let truncated = |e: ply_rs_bw::parser::ParseError| {
-            IoError::bad_mesh(
-                path,
-                format!("cannot read the {} '{name}' elements (truncated or corrupt?): {e}", def.count),
-            )
-        };
-        match name.as_str() {
-            "vertex" => {
-                let parser = Parser::<VertexIn>::new();
-                vertices = read_elements(&parser, &mut reader, def, &header).map_err(truncated)?;
-            }
-            "face" => {
-                let parser = Parser::<FaceIn>::new();
-                polygons = read_elements(&parser, &mut reader, def, &header).map_err(truncated)?;
-            }
-            _ => {
-                let parser = Parser::<SkipElement>::new();
-                read_elements(&parser, &mut reader, def, &header).map_err(truncated)?;
-            }
-        }
-    }
-    if !header.elements.contains_key("face") {
-        return Err(IoError::bad_mesh(path, "no 'face' element: a point cloud is not a mesh"));
-    }
-    // Data past the last element means the header's counts do not describe the file
-    // (a concatenation, or counts edited by hand): refused, not silently cut short.
-    let mut rest = Vec::new();
-    std::io::Read::read_to_end(reader.get_mut(), &mut rest).map_err(|e| IoError::io(path, e))?;
-    let trailing = match header.encoding {
-        Encoding::Ascii => rest.iter().filter(|b| !b.is_ascii_whitespace()).count(),
-        _ => rest.len(),
+    let (vertices, polygons) = match header.encoding {
+        Encoding::Ascii => read_ascii_body(path, &header, bytes, header_len)?,
+        _ => read_binary_body(path, &header, &mut reader)?,
     };
-    if trailing > 0 {
-        return Err(IoError::bad_mesh(
-            path,
-            format!(
-                "{} byte(s) follow the last element the header announces; the element counts do not match the data",
-                rest.len()
-            ),
-        ));
-    }
 
     let positions: Vec<Vec3> = vertices.iter().map(|v| Vec3::new(v.p[0], v.p[1], v.p[2])).collect();
-    let mut faces: Vec<Face> = Vec::with_capacity(polygons.len());
-    for (fi, poly) in polygons.iter().enumerate() {
-        let i = poly.indices();
-        if i.len() < 3 {
-            return Err(IoError::bad_mesh(path, format!("face {fi} has {} vertices", i.len())));
-        }
-        if let Some(&bad) = i.iter().find(|&&i| i < 0) {
-            return Err(IoError::bad_mesh(path, format!("face {fi} has a negative vertex index {bad}")));
-        }
-        for k in 1..i.len() - 1 {
-            faces.push([i[0] as u32, i[k] as u32, i[k + 1] as u32]);
-        }
-    }
+    let faces = triangulate(path, &polygons, positions.len(), header.encoding)?;
     let scalars = extra_names
         .into_iter()
         .enumerate()
@@ -150,6 +109,301 @@ pub fn read_ply_full(path: &Path) -> Result<PlyMesh, IoError> {
     let mesh = TriMesh::try_new(positions, faces, &stem)
         .map_err(|cause| IoError::InvalidMesh { path: path.to_owned(), cause })?;
     Ok(PlyMesh { mesh, scalars })
+}
+
+/// The checks the PLY crate does not make, all before any element is read (see
+/// [`read_ply_from`]). `header_bytes` is the raw header, `body_len` the bytes after it.
+fn check_header(path: &Path, header: &Header, header_bytes: &[u8], body_len: usize) -> Result<(), IoError> {
+    let bad = |reason: String| IoError::bad_mesh(path, reason);
+    if (header.version.major, header.version.minor) != (1, 0) {
+        return Err(bad(format!(
+            "PLY format version {}.{} is not 1.0, the only version there is",
+            header.version.major, header.version.minor
+        )));
+    }
+    check_unique_names(path, header_bytes)?;
+    let vertex = header.elements.get("vertex").ok_or_else(|| bad("no 'vertex' element".into()))?;
+    for axis in ["x", "y", "z"] {
+        match vertex.properties.get(axis).map(|p| &p.data_type) {
+            Some(PropertyType::Scalar(_)) => {}
+            Some(PropertyType::List(..)) => {
+                return Err(bad(format!("the vertex property '{axis}' is a list, not a number")));
+            }
+            None => return Err(bad(format!("the vertex element has no '{axis}' property"))),
+        }
+    }
+    let face = header
+        .elements
+        .get("face")
+        .ok_or_else(|| bad("no 'face' element: a point cloud is not a mesh".into()))?;
+    match face.properties.iter().find(|(name, _)| is_index_list(name)) {
+        Some((name, def)) => match def.data_type {
+            PropertyType::List(_, ScalarType::Float | ScalarType::Double) => {
+                return Err(bad(format!("the face list '{name}' holds floats, not vertex indices")));
+            }
+            PropertyType::Scalar(_) => {
+                return Err(bad(format!("the face property '{name}' is a single number, not a list")));
+            }
+            PropertyType::List(..) => {}
+        },
+        None => {
+            let found: Vec<&str> = face.properties.keys().map(String::as_str).collect();
+            return Err(bad(format!(
+                "the face element has no 'vertex_indices' list (its properties: {}); desal reads the \
+                 vertex index list under the name 'vertex_indices' or 'vertex_index'",
+                if found.is_empty() { "none".to_owned() } else { found.join(", ") }
+            )));
+        }
+    }
+    // Each element's smallest encoding, summed over the counts, must fit in the body.
+    let mut needed: usize = 0;
+    for (name, def) in &header.elements {
+        if def.properties.is_empty() {
+            if def.count > 0 {
+                return Err(bad(format!("the element '{name}' has {} entries but no properties", def.count)));
+            }
+            continue;
+        }
+        let per_element: usize = match header.encoding {
+            Encoding::Ascii => 2 * def.properties.len(),
+            _ => def
+                .properties
+                .values()
+                .map(|p| match &p.data_type {
+                    PropertyType::Scalar(t) | PropertyType::List(t, _) => scalar_size(t),
+                })
+                .sum(),
+        };
+        // An ASCII file may omit the last line's newline.
+        let slack = usize::from(header.encoding == Encoding::Ascii);
+        needed = def.count.checked_mul(per_element).and_then(|n| n.checked_add(needed)).unwrap_or(usize::MAX);
+        if needed > body_len + slack {
+            return Err(bad(format!(
+                "the header announces {} '{name}' elements of at least {per_element} bytes each, but only {body_len} \
+                 bytes follow the header: the element counts are wrong or the file is truncated",
+                def.count
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses an element named twice, or a property named twice in one element: the PLY
+/// crate keeps one of each, and every value after the duplicate would be misread.
+fn check_unique_names(path: &Path, header_bytes: &[u8]) -> Result<(), IoError> {
+    let text = String::from_utf8_lossy(header_bytes);
+    let mut elements: Vec<&str> = Vec::new();
+    let mut properties: Vec<&str> = Vec::new();
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("element") => {
+                let name = words.next().unwrap_or("");
+                if elements.contains(&name) {
+                    return Err(IoError::bad_mesh(
+                        path,
+                        format!("the header declares the element '{name}' twice"),
+                    ));
+                }
+                elements.push(name);
+                properties.clear();
+            }
+            Some("property") => {
+                let name = words.next_back().unwrap_or("");
+                if properties.contains(&name) {
+                    let element = elements.last().copied().unwrap_or("");
+                    return Err(IoError::bad_mesh(
+                        path,
+                        format!("the header declares the property '{name}' of element '{element}' twice"),
+                    ));
+                }
+                properties.push(name);
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+fn scalar_size(t: &ScalarType) -> usize {
+    match t {
+        ScalarType::Char | ScalarType::UChar => 1,
+        ScalarType::Short | ScalarType::UShort => 2,
+        ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
+        ScalarType::Double => 8,
+    }
+}
+
+/// Reads every element of a binary body through the PLY crate, then refuses trailing data.
+fn read_binary_body(
+    path: &Path,
+    header: &Header,
+    reader: &mut Reader<std::io::Cursor<&[u8]>>,
+) -> Result<(Vec<VertexIn>, Vec<FaceIn>), IoError> {
+    let mut vertices = Vec::new();
+    let mut polygons = Vec::new();
+    for (name, def) in &header.elements {
+        let truncated = |e: ply_rs_bw::parser::ParseError| {
+            IoError::bad_mesh(
+                path,
+                format!("cannot read the {} '{name}' elements (truncated or corrupt?): {e}", def.count),
+            )
+        };
+        match name.as_str() {
+            "vertex" => vertices = read_elements(&Parser::new(), reader, def, header).map_err(truncated)?,
+            "face" => polygons = read_elements(&Parser::new(), reader, def, header).map_err(truncated)?,
+            _ => {
+                read_elements(&Parser::<SkipElement>::new(), reader, def, header).map_err(truncated)?;
+            }
+        }
+    }
+    // Data past the last element means the header's counts do not describe the file
+    // (a concatenation, or counts edited by hand): refused, not silently cut short.
+    let cursor = reader.get_ref();
+    let rest = cursor.get_ref().len() - cursor.position() as usize;
+    if rest > 0 {
+        return Err(trailing(path, rest));
+    }
+    Ok((vertices, polygons))
+}
+
+/// Reads the ASCII body of `bytes` (after `header_len` header bytes) one element per
+/// line, refusing a line with more or fewer values than its element's properties
+/// declare (the PLY crate ignores extra ones).
+fn read_ascii_body(
+    path: &Path,
+    header: &Header,
+    bytes: &[u8],
+    header_len: usize,
+) -> Result<(Vec<VertexIn>, Vec<FaceIn>), IoError> {
+    let header_lines = bytes[..header_len].iter().filter(|&&b| b == b'\n').count();
+    let text = std::str::from_utf8(&bytes[header_len..])
+        .map_err(|e| IoError::NotText { path: path.to_owned(), offset: header_len + e.valid_up_to() })?;
+    let mut lines = text.split_inclusive('\n').enumerate().map(|(k, l)| (header_lines + k + 1, l));
+    let mut vertices = Vec::new();
+    let mut polygons = Vec::new();
+    for (name, def) in &header.elements {
+        match name.as_str() {
+            "vertex" => vertices = read_ascii_elements(path, &Parser::new(), &mut lines, name, def)?,
+            "face" => polygons = read_ascii_elements(path, &Parser::new(), &mut lines, name, def)?,
+            _ => {
+                read_ascii_elements::<SkipElement>(path, &Parser::new(), &mut lines, name, def)?;
+            }
+        }
+    }
+    let rest: usize = lines.map(|(_, l)| l.len()).sum();
+    if text[text.len() - rest..].bytes().any(|b| !b.is_ascii_whitespace()) {
+        return Err(trailing(path, rest));
+    }
+    Ok((vertices, polygons))
+}
+
+fn read_ascii_elements<'a, E: PropertyAccess>(
+    path: &Path,
+    parser: &Parser<E>,
+    lines: &mut impl Iterator<Item = (usize, &'a str)>,
+    name: &str,
+    def: &ElementDef,
+) -> Result<Vec<E>, IoError> {
+    // The count was checked against the body's size, so it bounds this allocation.
+    let mut out = Vec::with_capacity(def.count);
+    for i in 0..def.count {
+        let Some((line_no, line)) = lines.next() else {
+            return Err(IoError::bad_mesh(
+                path,
+                format!(
+                    "the file ends after {i} of the {} '{name}' elements the header announces",
+                    def.count
+                ),
+            ));
+        };
+        let bad = |reason: String| IoError::BadLine { path: path.to_owned(), line: line_no, reason };
+        let values: Vec<&str> = line.split([' ', '\t', '\r', '\n']).filter(|t| !t.is_empty()).collect();
+        let expected =
+            ascii_value_count(def, &values).map_err(|reason| bad(format!("{name} {i}: {reason}")))?;
+        if values.len() != expected {
+            let hint = if i + 1 == def.count && values.len() > expected {
+                format!(" (does the header claim more '{name}' elements than the file holds?)")
+            } else {
+                String::new()
+            };
+            return Err(bad(format!(
+                "{name} {i} has {} values, but the header's '{name}' properties take {expected}{hint}",
+                values.len()
+            )));
+        }
+        out.push(parser.read_ascii_element(line, def).map_err(|e| bad(format!("{name} {i}: {e}")))?);
+    }
+    Ok(out)
+}
+
+/// How many values an ASCII line of `def` holds, given its `values` (list lengths come
+/// from the line itself). Stops early, with what is needed so far, when `values` run out.
+fn ascii_value_count(def: &ElementDef, values: &[&str]) -> Result<usize, String> {
+    let mut at: usize = 0;
+    for (name, p) in &def.properties {
+        match p.data_type {
+            PropertyType::Scalar(_) => at += 1,
+            PropertyType::List(..) => {
+                let Some(t) = values.get(at) else { return Ok(at + 1) };
+                let n: usize =
+                    t.parse().map_err(|_| format!("the length '{t}' of list '{name}' is not a count"))?;
+                at = at.saturating_add(1).saturating_add(n);
+            }
+        }
+        if at > values.len() {
+            return Ok(at);
+        }
+    }
+    Ok(at)
+}
+
+fn trailing(path: &Path, bytes: usize) -> IoError {
+    IoError::bad_mesh(
+        path,
+        format!(
+            "{bytes} byte(s) follow the last element the header announces; the element counts do not match the data"
+        ),
+    )
+}
+
+/// Fan-triangulates the file's polygons, checking each by the file's own face number
+/// (before triangulation renumbers them).
+fn triangulate(
+    path: &Path,
+    polygons: &[FaceIn],
+    vertex_count: usize,
+    encoding: Encoding,
+) -> Result<Vec<Face>, IoError> {
+    let mut faces: Vec<Face> = Vec::with_capacity(polygons.len());
+    for (fi, poly) in polygons.iter().enumerate() {
+        let i = poly.indices();
+        if i.len() < 3 {
+            let hint = if encoding == Encoding::Ascii {
+                ""
+            } else {
+                "; in a binary file this usually means the header's element counts do not match the data \
+                 (one vertex or face more or fewer than the file holds)"
+            };
+            return Err(IoError::bad_mesh(
+                path,
+                format!("face {fi} has {} vertex indices (a face needs 3 or more){hint}", i.len()),
+            ));
+        }
+        if let Some(&bad) = i.iter().find(|&&i| i < 0) {
+            return Err(IoError::bad_mesh(path, format!("face {fi} has a negative vertex index {bad}")));
+        }
+        if let Some(&bad) = i.iter().find(|&&i| i as u64 >= vertex_count as u64) {
+            return Err(IoError::bad_mesh(
+                path,
+                format!("face {fi} references vertex {bad}, but the file has only {vertex_count} vertices"),
+            ));
+        }
+        for k in 1..i.len() - 1 {
+            faces.push([i[0] as u32, i[k] as u32, i[k + 1] as u32]);
+        }
+    }
+    Ok(faces)
 }
 
 /// Writes `mesh` (positions as f32, triangles as `uchar int` lists) with the extras in

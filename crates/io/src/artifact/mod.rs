@@ -174,6 +174,12 @@ pub struct InputRef {
 /// A payload type with its artifact kind.
 pub trait ArtifactBody: Serialize + DeserializeOwned {
     const KIND: ArtifactKind;
+
+    /// Checks what the byte format cannot: that the body agrees with itself (array
+    /// lengths match the counts they are indexed by, every index is in range), so that
+    /// code using a decoded body may index it without checks. Returns the first
+    /// inconsistency, naming the field and the offending entry. Run by every decode.
+    fn validate(&self) -> Result<(), String>;
 }
 
 /// The fixed header of an artifact, as read.
@@ -276,18 +282,27 @@ pub fn decode_artifact<T: ArtifactBody>(
     check_version(path, &header)?;
     let (producer, body): (Producer, T) = codec::decode(&bytes[HEADER_LEN..])
         .map_err(|reason| IoError::Decode { path: path.to_owned(), reason })?;
+    body.validate().map_err(|reason| IoError::InvalidArtifact {
+        path: path.to_owned(),
+        kind: T::KIND.name(),
+        reason,
+    })?;
     Ok((producer, body, header.checksum))
 }
 
-/// Reads and decodes an artifact file of kind `T::KIND`.
+/// Reads and decodes an artifact file of kind `T::KIND` (a regular file only).
 pub fn read_artifact<T: ArtifactBody>(path: &Path) -> Result<(Producer, T, ContentHash), IoError> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    let bytes = crate::file::read_regular_file(path)?;
     decode_artifact(path, &bytes)
 }
 
-/// True when the file at `path` starts with the artifact magic (false when unreadable).
+/// True when the file at `path` is a regular file that starts with the artifact magic
+/// (false when unreadable, and without opening a FIFO or device).
 pub fn is_artifact(path: &Path) -> bool {
     use std::io::Read;
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return false;
+    }
     let mut magic = [0u8; 8];
     std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut magic)).is_ok() && magic == MAGIC
 }
@@ -295,8 +310,14 @@ pub fn is_artifact(path: &Path) -> bool {
 /// Reads any artifact's header and producer (for `desal inspect`), checking the whole
 /// envelope.
 pub fn read_producer(path: &Path) -> Result<(ArtifactHeader, Producer), IoError> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
-    let header = check_envelope(path, &bytes)?;
+    let bytes = crate::file::read_regular_file(path)?;
+    decode_producer(path, &bytes)
+}
+
+/// The header and producer of the artifact in `bytes`, checking the whole envelope.
+/// `path` is for messages only.
+pub fn decode_producer(path: &Path, bytes: &[u8]) -> Result<(ArtifactHeader, Producer), IoError> {
+    let header = check_envelope(path, bytes)?;
     check_version(path, &header)?;
     let (producer, _) = codec::decode_prefix::<Producer>(&bytes[HEADER_LEN..])
         .map_err(|reason| IoError::Decode { path: path.to_owned(), reason })?;

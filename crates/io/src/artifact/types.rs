@@ -24,6 +24,25 @@ pub struct PoseSetV1 {
 
 impl ArtifactBody for PoseSetV1 {
     const KIND: ArtifactKind = ArtifactKind::PoseSet;
+
+    fn validate(&self) -> Result<(), String> {
+        let poses = self.positions.len();
+        expect_len("names", self.names.len(), "poses", poses)?;
+        if self.template as usize >= poses {
+            return Err(format!("template index {} is out of range for {poses} poses", self.template));
+        }
+        let vertices = self.positions[self.template as usize].len();
+        if vertices == 0 || self.faces.is_empty() {
+            return Err(format!("the pose set is empty ({vertices} vertices, {} faces)", self.faces.len()));
+        }
+        for (pose, p) in self.positions.iter().enumerate() {
+            expect_len(&format!("positions of pose {pose}"), p.len(), "template vertices", vertices)?;
+            if let Some(v) = p.iter().position(|q| !q.iter().all(|c| c.is_finite())) {
+                return Err(format!("vertex {v} of pose {pose} has a non-finite coordinate"));
+            }
+        }
+        check_faces(&self.faces, vertices)
+    }
 }
 
 impl PoseSetV1 {
@@ -51,6 +70,14 @@ pub struct LabelsV1 {
 
 impl ArtifactBody for LabelsV1 {
     const KIND: ArtifactKind = ArtifactKind::Labels;
+
+    fn validate(&self) -> Result<(), String> {
+        let parts = self.names.len();
+        match self.labels.iter().position(|&p| p as usize >= parts) {
+            Some(v) => Err(format!("vertex {v} has part id {}, but there are {parts} parts", self.labels[v])),
+            None => Ok(()),
+        }
+    }
 }
 
 impl LabelsV1 {
@@ -91,6 +118,31 @@ pub struct FitV1 {
 
 impl ArtifactBody for FitV1 {
     const KIND: ArtifactKind = ArtifactKind::Fit;
+
+    fn validate(&self) -> Result<(), String> {
+        let poses = self.pose_names.len();
+        let parts = self.part_names.len();
+        if poses > 0 && self.template as usize >= poses {
+            return Err(format!("template index {} is out of range for {poses} poses", self.template));
+        }
+        let fits = product(poses, parts)?;
+        expect_len("linear", self.linear.len(), "poses x parts", fits)?;
+        expect_len("translation", self.translation.len(), "poses x parts", fits)?;
+        expect_len("rms", self.rms.len(), "poses x parts", fits)?;
+        expect_len("mean", self.mean.len(), "poses x parts", fits)?;
+        expect_len("max", self.max.len(), "poses x parts", fits)?;
+        let residuals = product(poses, self.vertex_count as usize)?;
+        expect_len("residuals", self.residuals.len(), "poses x vertices", residuals)?;
+        for (k, &(part, _, _, pose)) in self.worst_parts.iter().enumerate() {
+            check_index(&format!("worst_parts[{k}]"), "part", part, parts)?;
+            check_index(&format!("worst_parts[{k}]"), "pose", pose, poses)?;
+        }
+        for (k, &(pose, _, _, part)) in self.worst_poses.iter().enumerate() {
+            check_index(&format!("worst_poses[{k}]"), "pose", pose, poses)?;
+            check_index(&format!("worst_poses[{k}]"), "part", part, parts)?;
+        }
+        Ok(())
+    }
 }
 
 /// Stage 2's result, per template vertex.
@@ -115,6 +167,12 @@ pub struct SaliencyV1 {
 
 impl ArtifactBody for SaliencyV1 {
     const KIND: ArtifactKind = ArtifactKind::Saliency;
+
+    fn validate(&self) -> Result<(), String> {
+        let vertices = self.saliency.len();
+        expect_len("weights", self.weights.len(), "saliency values", vertices)?;
+        expect_len("raw", self.raw.len(), "saliency values", vertices)
+    }
 }
 
 /// Stage 3's result: the simplified template as the simplifier left it.
@@ -141,6 +199,21 @@ pub struct SimplifiedV1 {
 
 impl ArtifactBody for SimplifiedV1 {
     const KIND: ArtifactKind = ArtifactKind::Simplified;
+
+    fn validate(&self) -> Result<(), String> {
+        let vertices = self.positions.len();
+        expect_len("simp_to_orig", self.simp_to_orig.len(), "positions", vertices)?;
+        if let Some(v) = self.positions.iter().position(|q| !q.iter().all(|c| c.is_finite())) {
+            return Err(format!("simplified vertex {v} has a non-finite coordinate"));
+        }
+        for (simp_idx, orig_idx) in self.simp_to_orig.iter().enumerate() {
+            if let Some(orig_idx) = *orig_idx {
+                let what = format!("simp_to_orig[{simp_idx}]");
+                check_index(&what, "original vertex", orig_idx, self.input_vertices as usize)?;
+            }
+        }
+        check_faces(&self.faces, vertices)
+    }
 }
 
 /// Stage 4's result: each simplified vertex's original vertex, and the simplified
@@ -160,4 +233,39 @@ pub struct MapV1 {
 
 impl ArtifactBody for MapV1 {
     const KIND: ArtifactKind = ArtifactKind::Map;
+
+    fn validate(&self) -> Result<(), String> {
+        let mut sorted = self.simp_to_orig.clone();
+        sorted.sort_unstable();
+        if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+            return Err(format!("original vertex {} is mapped to twice (the map must be one to one)", w[0]));
+        }
+        check_faces(&self.faces, self.simp_to_orig.len())
+    }
+}
+
+/// `Err` unless the array `what` has `len` entries, as many as `of` (`expected`).
+fn expect_len(what: &str, len: usize, of: &str, expected: usize) -> Result<(), String> {
+    if len == expected {
+        return Ok(());
+    }
+    Err(format!("{what} has {len} entries, but there are {expected} {of}"))
+}
+
+/// `Err` unless `index` (the `role` of entry `what`) is below `count`.
+fn check_index(what: &str, role: &str, index: u32, count: usize) -> Result<(), String> {
+    if (index as usize) < count {
+        return Ok(());
+    }
+    Err(format!("{what} names {role} {index}, but there are only {count}"))
+}
+
+/// `a × b` for array sizes, refusing an overflow (only a forged count can overflow).
+fn product(a: usize, b: usize) -> Result<usize, String> {
+    a.checked_mul(b).ok_or_else(|| format!("{a} x {b} entries overflow"))
+}
+
+/// Every face index below `vertices`, named by face (the file's own face numbers).
+fn check_faces(faces: &[[u32; 3]], vertices: usize) -> Result<(), String> {
+    desal_mesh::validate::check_face_indices(faces, vertices).map_err(|e| e.to_string())
 }
