@@ -18,9 +18,12 @@ use crate::stages::runner::StageOutput;
 
 /// Version of ingest (reading and validating the pose files) as the driver runs it;
 /// bump when its output for the same files and parameters changes.
-pub const INGEST_VERSION: u32 = 1;
+/// 2: the readers refuse what they once let through (issue 12: lying counts, extra ASCII
+/// values, duplicate PLY properties), so entries made from such files are not served.
+pub const INGEST_VERSION: u32 = 2;
 /// Version of the labels stage (reading and validating the labels file).
-pub const LABELS_VERSION: u32 = 1;
+/// 2: empty parts refused in text and JSON alike; parts checked at the fit's threshold.
+pub const LABELS_VERSION: u32 = 2;
 
 /// Which pose is the template: a pose file name or stem, or a 0-based index into the
 /// sorted list.
