@@ -332,6 +332,52 @@ impl Cache {
     }
 }
 
+impl Cache {
+    /// Removes every entry whose key is not in `keep` (hex keys), each by
+    /// rename-then-delete, plus dead runs' leftovers; returns `(entries kept, entries
+    /// removed, bytes freed)`. `desal cache gc` passes the keys of a pipeline's stages.
+    pub fn gc(&self, keep: &std::collections::BTreeSet<String>) -> Result<(usize, usize, u64)> {
+        let (mut kept, mut removed, mut freed) = (0, 0, 0);
+        let Ok(stages) = fs::read_dir(&self.root) else { return Ok((0, 0, 0)) };
+        for stage in stages.flatten() {
+            let stage_dir = stage.path();
+            if !stage_dir.is_dir() || stage.file_name() == "explain" {
+                continue;
+            }
+            desal_io::dir::remove_leftovers(&stage_dir);
+            for entry in
+                fs::read_dir(&stage_dir).with_context(|| format!("cannot read {}", stage_dir.display()))?
+            {
+                let entry = entry.with_context(|| format!("cannot read {}", stage_dir.display()))?;
+                let name = entry.file_name().to_string_lossy().into_owned();
+                if name.starts_with('.') || !entry.path().is_dir() {
+                    continue;
+                }
+                if keep.contains(&name) {
+                    kept += 1;
+                    continue;
+                }
+                let mut size = 0;
+                for file in fs::read_dir(entry.path())
+                    .with_context(|| format!("cannot read {}", entry.path().display()))?
+                {
+                    size += file
+                        .and_then(|f| f.metadata())
+                        .map(|m| m.len())
+                        .with_context(|| format!("cannot read {}", entry.path().display()))?;
+                }
+                let trash = stage_dir.join(format!(".{name}.old-{}-0", std::process::id()));
+                fs::rename(entry.path(), &trash)
+                    .with_context(|| format!("cannot remove {}", entry.path().display()))?;
+                fs::remove_dir_all(&trash).with_context(|| format!("cannot remove {}", trash.display()))?;
+                removed += 1;
+                freed += size;
+            }
+        }
+        Ok((kept, removed, freed))
+    }
+}
+
 /// Test hook: with `DESAL_FAULT_ABORT_IN_STORE=<stage>`, the process aborts halfway
 /// through storing that stage's entry, as a killed run would. The end-to-end tests use it
 /// to prove that a killed run leaves no entry behind.

@@ -64,10 +64,31 @@ enum Command {
     /// The paper's experiment: simplify with each method, fit the SCAPE deformation model
     /// on the simplified poses, deform to every pose and measure v2f/v2v (eval.md).
     Eval(desal::evaluate::EvalArgs),
+    /// The cache: `desal cache gc PIPELINE.toml` keeps the entries the pipeline's
+    /// datasets use (running it, from the cache, to know their keys) and removes the rest.
+    Cache {
+        #[command(subcommand)]
+        action: CacheAction,
+    },
     /// Describe artifacts: kind, version, producer, inputs, summary figures.
     Inspect {
         #[arg(required = true)]
         files: Vec<PathBuf>,
+    },
+}
+
+#[derive(Debug, Subcommand)]
+enum CacheAction {
+    /// Remove every entry the pipeline's datasets do not use.
+    Gc {
+        /// The pipeline file whose entries are kept (all its datasets, every shard).
+        pipeline: PathBuf,
+        /// Replaces the pipeline file's output root.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Cache folder (default: <output root>/.cache).
+        #[arg(long)]
+        cache_dir: Option<PathBuf>,
     },
 }
 
@@ -101,6 +122,25 @@ fn run(cli: Cli) -> Result<()> {
         Command::Simplify(args) => desal::cli::simplify(&args),
         Command::Map(args) => desal::cli::map(&args),
         Command::Eval(args) => desal::evaluate::eval(&args),
+        Command::Cache { action: CacheAction::Gc { pipeline, out, cache_dir } } => {
+            let loaded = desal::pipeline::load(&pipeline, out.as_deref())?;
+            let options = RunOptions {
+                out,
+                cache_dir: cache_dir.clone(),
+                progress: ProgressMode::Quiet,
+                ..RunOptions::default()
+            };
+            let reports = desal::run::run(&loaded, &options)?;
+            let keep = reports.iter().flat_map(|r| r.stages.iter().map(|s| s.cache_key.clone())).collect();
+            let cache = desal::cache::Cache::new(cache_dir.unwrap_or_else(|| loaded.out_root.join(".cache")));
+            let (kept, removed, freed) = cache.gc(&keep)?;
+            println!(
+                "{}: kept {kept} entries, removed {removed} ({:.1} MB)",
+                cache.root().display(),
+                freed as f64 / 1e6
+            );
+            Ok(())
+        }
         Command::Inspect { files } => {
             // Every file is described or its error printed; the exit code says whether
             // any failed.

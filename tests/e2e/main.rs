@@ -3,6 +3,7 @@
 mod artifacts;
 mod cache;
 mod eval;
+mod faults;
 mod ingest;
 mod stages;
 mod support;

@@ -41,7 +41,8 @@ COMPARED = (".dsa", ".ply", ".png", ".txt")
 def pipeline(work: Path, target: int) -> Path:
     """The bundled sample as a pipeline file writing into `work/out`."""
     text = (ROOT / "pipelines/sample.toml").read_text()
-    text = text.replace('out = "../out"', f'out = "{work / "out"}"')
+    # Relative to the pipeline file, so a copy of `work` is a self-contained state.
+    text = text.replace('out = "../out"', 'out = "out"')
     text = text.replace("../data-samples", str(ROOT / "data-samples"))
     text = re.sub(r"target_vertices = \d+", f"target_vertices = {target}", text)
     path = work / f"sample-{target}.toml"
@@ -49,7 +50,7 @@ def pipeline(work: Path, target: int) -> Path:
     return path
 
 
-def run(binary, args, kill_at=None, check=True):
+def run(binary, args, kill_at=None, check=True, cwd=None):
     """Runs desal; with `kill_at = (syscall, k)`, under strace, killed at the k-th call of
     that syscall (strace counts per syscall and per thread)."""
     cmd = [binary] + args + ["--quiet"]
@@ -57,16 +58,16 @@ def run(binary, args, kill_at=None, check=True):
         syscall, k = kill_at
         cmd = ["strace", "-f", "-qq", "-o", "/dev/null", "-e", f"trace={syscall}",
                "-e", f"inject={syscall}:signal=KILL:when={k}"] + cmd
-    result = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    result = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=cwd)
     if check and result.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed ({result.returncode}):\n{result.stderr}")
     return result
 
 
-def count_calls(binary, args) -> dict:
+def count_calls(binary, args, cwd) -> dict:
     """Calls of each filesystem syscall in one run (all threads together)."""
     out = subprocess.run(["strace", "-f", "-qq", "-c", "-e", f"trace={SYSCALLS}", binary] + args + ["--quiet"],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=cwd)
     counts = {}
     for line in out.stderr.splitlines():
         fields = line.split()
@@ -95,33 +96,36 @@ class Scenario:
         self.name, self.binary, self.scratch = name, binary, scratch
 
     def prepare(self, work: Path):
-        """Builds the starting state in `work`; returns (args of the killed run, args of
-        the recovery run)."""
+        """Builds the starting state in `work` (self-contained: it may be copied); returns
+        (args of the killed run, args of the recovery run), relative to `work`."""
         p2500, p2000 = pipeline(work, 2500), pipeline(work, 2000)
+        if self.name != "cold":
+            run(self.binary, ["run", str(p2500)])
+        if self.name == "replace":
+            run(self.binary, ["eval", str(p2500), "--folds", "2", "--methods", "qslim-optimal"])
         if self.name == "cold":
-            return ["run", str(p2500)], ["run", str(p2500)]
-        run(self.binary, ["run", str(p2500)])
+            return ["run", p2500.name], ["run", p2500.name]
         if self.name == "force":
-            return ["run", str(p2500), "--force"], ["run", str(p2500)]
-        run(self.binary, ["eval", str(p2500), "--folds", "2", "--methods", "qslim-optimal"])
-        return ["run", str(p2000)], ["run", str(p2000)]
+            return ["run", p2500.name, "--force"], ["run", p2500.name]
+        return ["run", p2000.name], ["run", p2000.name]
 
 
 def sweep(scenario: Scenario, stride: int) -> tuple:
     base = Path(tempfile.mkdtemp(dir=scenario.scratch))
-    # The reference: the recovery command's outputs from a clean, unkilled start.
+    # The starting state, built once and copied for every kill point.
+    start = base / "start"
+    start.mkdir()
+    killed_args, recover_args = scenario.prepare(start)
+    eval_before = digest(start / "out/sample/eval") if (start / "out/sample/eval").is_dir() else None
+    # The reference: the recovery command's outputs after an unkilled run.
     ref = base / "ref"
-    ref.mkdir()
-    killed_args, recover_args = scenario.prepare(ref)
-    eval_before = digest(ref / "out/sample/eval") if (ref / "out/sample/eval").is_dir() else None
-    run(scenario.binary, killed_args)
-    run(scenario.binary, recover_args)
+    shutil.copytree(start, ref, symlinks=True)
+    run(scenario.binary, killed_args, cwd=ref)
+    run(scenario.binary, recover_args, cwd=ref)
     expected = digest(ref / "out/sample")
-    # Count the killed command's calls on a fresh starting state.
     probe = base / "probe"
-    probe.mkdir()
-    args, _ = scenario.prepare(probe)
-    counts = count_calls(scenario.binary, args)
+    shutil.copytree(start, probe, symlinks=True)
+    counts = count_calls(scenario.binary, killed_args, probe)
     shutil.rmtree(probe)
     total = sum(counts.values())
     tried = landed = 0
@@ -129,14 +133,13 @@ def sweep(scenario: Scenario, stride: int) -> tuple:
     points = [(syscall, k) for syscall, n in sorted(counts.items()) for k in range(1, n + 1, stride)]
     for syscall, k in points:
         work = base / f"{syscall}-{k}"
-        work.mkdir()
-        killed_args, recover_args = scenario.prepare(work)
+        shutil.copytree(start, work, symlinks=True)
         tried += 1
-        result = run(scenario.binary, killed_args, kill_at=(syscall, k), check=False)
+        result = run(scenario.binary, killed_args, kill_at=(syscall, k), check=False, cwd=work)
         if result.returncode != 0:
             landed += 1
         try:
-            run(scenario.binary, recover_args)
+            run(scenario.binary, recover_args, cwd=work)
             got = digest(work / "out/sample")
             if got != expected:
                 diff = sorted(set(got.items()) ^ set(expected.items()))[:4]
