@@ -17,16 +17,26 @@
 mod bvh;
 pub mod closest_point;
 pub mod error;
+pub mod floor;
 pub mod folds;
 pub mod gradient;
+pub mod lbs;
 pub mod metrics;
 pub mod model;
 pub mod poisson;
+pub mod pose_model;
+pub mod ridge;
 pub mod skeleton;
+pub mod transform;
 
 pub use error::EvalError;
+pub use floor::{MeanErrors, ModelFloor, model_floor};
 pub use folds::{folds, training_poses};
+pub use lbs::{LbsConfig, LbsModel, LbsReport, fit_lbs};
 pub use metrics::{SurfaceIndex, V2fHalves, VertexErrors, VertexIndex, v2f, v2f_halves, v2v, vertex_errors};
-pub use model::{Model, ModelConfig, ModelReport, fit_model};
-pub use poisson::PoissonSolver;
+pub use model::{Anchoring, DEFAULT_ANCHOR_SCALE, Model, ModelConfig, ModelReport, Regression, fit_model};
+pub use poisson::{AnchoredPoissonSolver, PoissonSolver};
+pub use pose_model::{FittedModel, PoseModel};
+pub use ridge::JointFeatures;
 pub use skeleton::{Joint, Skeleton};
+pub use transform::{PartTransform, rotations_of};
