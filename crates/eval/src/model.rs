@@ -89,8 +89,9 @@ pub struct ModelConfig {
     pub root_part: Option<u32>,
     /// Fixed or cross-validated ridge and features. Default [`Regression::Fixed`]: the
     /// cross-validated rule is measured worse in held-out position error on SCAPE
-    /// (v2v 6.80e-5 vs 6.25e-5 m² at anchor scale 0.1, 5 folds) and level on the sample
-    /// (`tests/floor.rs`): leave-one-out error in `Q` picks a ridge of 1e-2 on SCAPE, but
+    /// (5 folds, v2v 6.97e-5 vs 6.77e-5 m² at the default anchoring, 2.03e-4 vs
+    /// 1.79e-4 with centroid placement) and level on the sample (1.48e-6 vs 1.46e-6;
+    /// `tests/floor.rs`): leave-one-out error in `Q` picks a ridge of 1e-2 on SCAPE, but
     /// positions want less shrinkage, because the Poisson solve averages away the
     /// per-triangle noise that the `Q`-space criterion guards against.
     pub regression: Regression,
