@@ -6,7 +6,7 @@
 //! Both figures are means over the **non-template** poses (the template is reproduced
 //! exactly by construction and would dilute them):
 //! - *in-sample*: one model fitted on every pose synthesises each pose;
-//! - *held out*: the non-template poses are dealt into `k` folds ([`crate::folds`]); each
+//! - *held out*: the non-template poses are dealt into `k` folds ([`crate::folds::folds`]); each
 //!   fold's model, fitted on the other poses (template included), synthesises the fold.
 //!
 //! Errors are the paper's v2v (Eq. 7) and v2f (Eq. 6) of the synthesised pose against
@@ -33,7 +33,7 @@ pub struct MeanErrors {
 pub struct ModelFloor {
     /// Number of poses each mean is over (the non-template poses).
     pub pose_count: usize,
-    /// Number of held-out folds actually used (`k` clamped, see [`crate::folds`]).
+    /// Number of held-out folds actually used (`k` clamped, see [`crate::folds::folds`]).
     pub fold_count: usize,
     pub in_sample: MeanErrors,
     pub held_out: MeanErrors,

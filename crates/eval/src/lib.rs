@@ -8,7 +8,14 @@
 //!   fit), then driven by part rotations alone; built from [`skeleton`] (parts, joints,
 //!   twists), [`gradient`] (deformation gradients) and [`poisson`] (sparse
 //!   reconstruction).
-//! - [`folds`]: k-fold splits over poses for held-out evaluation.
+//!   Placement by the centroid or, by default, part-anchored ([`Anchoring`]); ridge
+//!   fixed or chosen by leave-one-out cross-validation ([`ridge`]).
+//! - [`fit_lbs`] / [`LbsModel::synthesize`]: the second deformation model, linear blend
+//!   skinning with the parts as bones ([`lbs`]).
+//! - [`PoseModel`] / [`FittedModel`]: one interface over both, driven by the parts' rigid
+//!   motions ([`PartTransform`], stage 1's fit); [`model_floor`] measures either model's
+//!   own error in-sample and held out ([`floor`]).
+//! - [`folds()`]: k-fold splits over poses for held-out evaluation.
 //!
 //! **Invariant:** like every stage crate, this one knows no file, path or progress bar:
 //! it takes meshes, labels and rotations, and returns positions and numbers. The method

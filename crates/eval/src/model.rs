@@ -176,9 +176,11 @@ pub struct Model {
 /// - `rotations[pose][part]`: the rotation taking part `part` of the template to pose
 ///   `pose`, for **every** pose of the set (only the training poses are read);
 /// - `training_poses`: distinct pose indices; the template need not be among them (with
-///   held-out folds it always is, see [`crate::folds`]).
+///   held-out folds it always is, see [`crate::folds::folds`]).
 ///
-/// Cost: one pass over triangles × training poses, one sparse factorisation.
+/// Cost: one pass over triangles × training poses (plus one per ridge candidate with
+/// [`Regression::CrossValidated`]), one sparse factorisation (two with
+/// [`Anchoring::Parts`]).
 pub fn fit_model(
     poses: &PoseSet,
     labels: &PartLabels,

@@ -13,7 +13,7 @@
 //! `h_ii = f_iᵀ (AᵀA + λD)⁻¹ f_i` (Hastie, Tibshirani & Friedman, *The Elements of
 //! Statistical Learning*, §7.10) — exact for any fixed penalty, so no refit is needed.
 //!
-//! **The rule** ([`select_regression`]): over every candidate — the two feature sets
+//! **The rule** (applied by [`crate::fit_model`] with [`crate::Regression::CrossValidated`]): over every candidate — the two feature sets
 //! times the ridge grid [`RIDGE_GRID`] — sum the squared leave-one-out residuals
 //! `Σ_k Σ_i ‖e_ki / (1 − h_kii)‖²_F` over all triangles `k` and training poses `i`, and
 //! keep the candidate with the smallest sum (ties: the first in the order
