@@ -49,10 +49,16 @@ pub struct LbsConfig {
     /// At most this many bones per vertex, `1..=4`. Default 4.
     pub max_influences: usize,
     /// Strength of the pull towards the prior weights (dimensionless, see the module
-    /// doc). Default `0.1`. On the sample (5 folds, `tests/floor.rs` sweep) held-out v2v
-    /// is 1.46e-6 m² at 0.01, 1.22e-6 at 0.1 and 1.21e-6 at 1.0 (rings 3), and 1.91e-6,
-    /// 1.42e-6, 1.92e-6 at 1, 6, 10 rings (prior 0.1); SCAPE was measured at the
-    /// default only.
+    /// doc). Default `0.1`. Held-out v2v, 5 folds (`default_sweeps` in
+    /// `tests/floor.rs`), m²:
+    ///
+    /// | rings, prior | 3, 0.01 | 3, 0.1 | 3, 1 | 1, 0.1 | 6, 0.1 | 10, 0.1 |
+    /// |---|---|---|---|---|---|---|
+    /// | SCAPE | 9.24e-5 | 9.24e-5 | 9.25e-5 | 9.91e-5 | 8.72e-5 | 8.35e-5 |
+    /// | sample | 1.46e-6 | 1.22e-6 | 1.21e-6 | 1.91e-6 | 1.42e-6 | 1.92e-6 |
+    ///
+    /// The prior hardly matters on SCAPE; wider blends help SCAPE (−10 % at 10 rings)
+    /// and hurt the sample (+58 %), so the defaults stay at 3 rings, prior 0.1.
     pub prior: Real,
 }
 
