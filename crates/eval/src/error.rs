@@ -25,6 +25,10 @@ pub enum EvalError {
     #[error("pose {pose}, part {part}: the part rotation is not finite")]
     NonFiniteRotation { pose: usize, part: usize },
 
+    /// A part transform (rotation or translation) contains NaN or infinity.
+    #[error("pose {pose}, part {part}: the part transform is not finite")]
+    NonFiniteTransform { pose: usize, part: usize },
+
     /// The model needs at least one training pose.
     #[error("no training poses given")]
     NoTrainingPoses,

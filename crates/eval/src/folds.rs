@@ -1,4 +1,7 @@
-//! K-fold splits over poses for held-out evaluation of the deformation model.
+//! K-fold splits over poses for held-out evaluation of the deformation model, and the
+//! check of a model's training poses.
+
+use crate::error::EvalError;
 
 /// Splits the non-template poses of a `pose_count`-pose set into `k` test folds.
 ///
@@ -30,6 +33,24 @@ pub fn training_poses(pose_count: usize, test: &[usize]) -> Vec<usize> {
         is_test[p] = true;
     }
     (0..pose_count).filter(|&p| !is_test[p]).collect()
+}
+
+/// Checks a model's training poses against a `pose_count`-pose set: at least one,
+/// each in range, none twice (it would silently weigh double).
+pub(crate) fn check_training_poses(pose_count: usize, training_poses: &[usize]) -> Result<(), EvalError> {
+    if training_poses.is_empty() {
+        return Err(EvalError::NoTrainingPoses);
+    }
+    let mut seen = vec![false; pose_count];
+    for &pose in training_poses {
+        if pose >= pose_count {
+            return Err(EvalError::TrainingPoseOutOfRange { pose, pose_count });
+        }
+        if std::mem::replace(&mut seen[pose], true) {
+            return Err(EvalError::DuplicateTrainingPose { pose });
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

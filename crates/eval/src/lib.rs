@@ -8,7 +8,14 @@
 //!   fit), then driven by part rotations alone; built from [`skeleton`] (parts, joints,
 //!   twists), [`gradient`] (deformation gradients) and [`poisson`] (sparse
 //!   reconstruction).
-//! - [`folds`]: k-fold splits over poses for held-out evaluation.
+//!   Placement by the centroid or, by default, part-anchored ([`Anchoring`]); ridge
+//!   fixed or chosen by leave-one-out cross-validation ([`ridge`]).
+//! - [`fit_lbs`] / [`LbsModel::synthesize`]: the second deformation model, linear blend
+//!   skinning with the parts as bones ([`lbs`]).
+//! - [`PoseModel`] / [`FittedModel`]: one interface over both, driven by the parts' rigid
+//!   motions ([`PartTransform`], stage 1's fit); [`model_floor`] measures either model's
+//!   own error in-sample and held out ([`floor`]).
+//! - [`folds()`]: k-fold splits over poses for held-out evaluation.
 //!
 //! **Invariant:** like every stage crate, this one knows no file, path or progress bar:
 //! it takes meshes, labels and rotations, and returns positions and numbers. The method
@@ -17,16 +24,26 @@
 mod bvh;
 pub mod closest_point;
 pub mod error;
+pub mod floor;
 pub mod folds;
 pub mod gradient;
+pub mod lbs;
 pub mod metrics;
 pub mod model;
 pub mod poisson;
+pub mod pose_model;
+pub mod ridge;
 pub mod skeleton;
+pub mod transform;
 
 pub use error::EvalError;
+pub use floor::{MeanErrors, ModelFloor, model_floor};
 pub use folds::{folds, training_poses};
+pub use lbs::{LbsConfig, LbsModel, LbsReport, fit_lbs};
 pub use metrics::{SurfaceIndex, V2fHalves, VertexErrors, VertexIndex, v2f, v2f_halves, v2v, vertex_errors};
-pub use model::{Model, ModelConfig, ModelReport, fit_model};
-pub use poisson::PoissonSolver;
+pub use model::{Anchoring, DEFAULT_ANCHOR_SCALE, Model, ModelConfig, ModelReport, Regression, fit_model};
+pub use poisson::{AnchoredPoissonSolver, PoissonSolver};
+pub use pose_model::{FittedModel, PoseModel};
+pub use ridge::JointFeatures;
 pub use skeleton::{Joint, Skeleton};
+pub use transform::{PartTransform, rotations_of};

@@ -18,6 +18,15 @@
 //! components, each keeps the offset of its centroid from the whole-mesh centroid that
 //! it has in the template (isolated vertices count as components of one vertex).
 //!
+//! **Anchored variant** ([`AnchoredPoissonSolver`]): instead of pinning a vertex and
+//! placing the centroid, every vertex `v` is also pulled towards an anchor position
+//! `a_v` with weight `w_v`, i.e. the energy gains `Σ_v w_v ‖y_v − a_v‖²`. The matrix
+//! becomes `L + W` (positive definite as soon as every component has one positive
+//! weight), so nothing is pinned and the anchors fix the translation. Because the
+//! Laplacian's low-frequency modes have small eigenvalues, a small `W` acts as a
+//! low-pass filter: error that varies slowly along the surface (drift integrated down a
+//! kinematic chain) is taken from the anchors, detail from the gradients.
+//!
 //! The factorisation and solves run single-threaded (`Parallelism::None`): callers
 //! parallelise over poses, and results stay bit-identical for any thread count.
 
@@ -58,17 +67,10 @@ impl PoissonSolver {
         let component = label_components(template.len(), faces);
         let (free_index, free_count) = pin_one_vertex_per_component(&component);
         let component_offsets = component_centroid_offsets(template, &component);
-        let (symbolic, factor_values) = factorise_laplacian(faces, &free_index, free_count)?;
-        let template_edges = faces
-            .iter()
-            .map(|&[a, b, c]| {
-                let x1 = template[a as usize];
-                [template[b as usize] - x1, template[c as usize] - x1]
-            })
-            .collect();
+        let (symbolic, factor_values) = factorise_laplacian(faces, &free_index, free_count, &[])?;
         Ok(Self {
             faces: faces.to_vec(),
-            template_edges,
+            template_edges: template_edges(template, faces),
             free_index,
             component,
             component_offsets,
@@ -99,35 +101,17 @@ impl PoissonSolver {
     /// `b = Dᵀ g`: each edge target `g = T_k ê_kj` pulls its far corner by `+g` and the
     /// triangle's first corner by `−g`; pinned vertices (fixed at 0) drop out.
     fn assemble_rhs(&self, gradients: &[Mat3]) -> Mat<Real> {
-        let free_count = self.symbolic.nrows();
-        let mut rhs = Mat::<Real>::zeros(free_count, 3);
-        let mut add = |vertex: u32, g: &Vec3| {
-            let row = self.free_index[vertex as usize];
-            if row != PINNED {
-                for axis in 0..3 {
-                    rhs[(row as usize, axis)] += g[axis];
-                }
-            }
-        };
-        for ((&[v1, v2, v3], edges), gradient) in self.faces.iter().zip(&self.template_edges).zip(gradients) {
-            for (far, edge) in [(v2, &edges[0]), (v3, &edges[1])] {
-                let g = gradient * edge;
-                add(far, &g);
-                add(v1, &-g);
-            }
-        }
-        rhs
+        assemble_edge_rhs(
+            &self.faces,
+            &self.template_edges,
+            &self.free_index,
+            self.symbolic.nrows(),
+            gradients,
+        )
     }
 
     fn solve_in_place(&self, rhs: &mut Mat<Real>) {
-        let req = self.symbolic.solve_in_place_req::<Real>(3).expect("workspace size of a 3-column solve");
-        let mut buffer = GlobalPodBuffer::new(req);
-        LltRef::<usize, Real>::new(&self.symbolic, &self.factor_values).solve_in_place_with_conj(
-            Conj::No,
-            rhs.as_mut(),
-            Parallelism::None,
-            PodStack::new(&mut buffer),
-        );
+        solve_llt_in_place(&self.symbolic, &self.factor_values, rhs);
     }
 
     fn scatter_solution(&self, solution: &Mat<Real>) -> Vec<Vec3> {
@@ -135,10 +119,7 @@ impl PoissonSolver {
             .iter()
             .map(|&row| match row {
                 PINNED => Vec3::zeros(),
-                r => {
-                    let r = r as usize;
-                    Vec3::new(solution[(r, 0)], solution[(r, 1)], solution[(r, 2)])
-                }
+                r => row_of(solution, r as usize),
             })
             .collect()
     }
@@ -161,6 +142,113 @@ impl PoissonSolver {
         }
         positions
     }
+}
+
+/// A factorised anchored Poisson system `(L + W) y = b + W a` for one mesh: the edge
+/// terms of [`PoissonSolver`] plus a soft pull of each vertex towards an anchor (see the
+/// module doc). Nothing is pinned; the anchors fix the translation.
+#[derive(Debug)]
+pub struct AnchoredPoissonSolver {
+    faces: Vec<Face>,
+    template_edges: Vec<[Vec3; 2]>,
+    /// `w_v`, per vertex (dimensionless: it weighs squared distances against the
+    /// squared edge residuals of the unit-weight edge terms).
+    weights: Vec<Real>,
+    symbolic: SymbolicCholesky<usize>,
+    factor_values: Vec<Real>,
+}
+
+impl AnchoredPoissonSolver {
+    /// Builds and factorises `L + W` for a mesh with template positions `template`,
+    /// triangles `faces` and anchor weights `weights[v] > 0` (one per vertex).
+    pub fn new(template: &[Vec3], faces: &[Face], weights: &[Real]) -> Result<Self, EvalError> {
+        debug_assert_eq!(template.len(), weights.len());
+        debug_assert!(weights.iter().all(|&w| w > 0.0 && w.is_finite()), "anchor weights must be positive");
+        let free_index: Vec<u32> = (0..template.len() as u32).collect();
+        let (symbolic, factor_values) = factorise_laplacian(faces, &free_index, template.len(), weights)?;
+        Ok(Self {
+            faces: faces.to_vec(),
+            template_edges: template_edges(template, faces),
+            weights: weights.to_vec(),
+            symbolic,
+            factor_values,
+        })
+    }
+
+    pub fn vertex_count(&self) -> usize {
+        self.weights.len()
+    }
+
+    /// Positions minimising the edge residuals of `gradients` (face order) plus
+    /// `Σ_v w_v ‖y_v − anchors[v]‖²` (`anchors` in the mesh's vertex index space).
+    pub fn solve(&self, gradients: &[Mat3], anchors: &[Vec3]) -> Vec<Vec3> {
+        debug_assert_eq!(gradients.len(), self.faces.len());
+        debug_assert_eq!(anchors.len(), self.weights.len());
+        let free_index: Vec<u32> = (0..self.weights.len() as u32).collect();
+        let mut rhs =
+            assemble_edge_rhs(&self.faces, &self.template_edges, &free_index, self.weights.len(), gradients);
+        for (v, (w, a)) in self.weights.iter().zip(anchors).enumerate() {
+            for axis in 0..3 {
+                rhs[(v, axis)] += w * a[axis];
+            }
+        }
+        solve_llt_in_place(&self.symbolic, &self.factor_values, &mut rhs);
+        (0..self.weights.len()).map(|v| row_of(&rhs, v)).collect()
+    }
+}
+
+/// Template edges `[x2 − x1, x3 − x1]` per face.
+fn template_edges(template: &[Vec3], faces: &[Face]) -> Vec<[Vec3; 2]> {
+    faces
+        .iter()
+        .map(|&[a, b, c]| {
+            let x1 = template[a as usize];
+            [template[b as usize] - x1, template[c as usize] - x1]
+        })
+        .collect()
+}
+
+/// `b = Dᵀ g`: each edge target `g = T_k ê_kj` pulls its far corner by `+g` and the
+/// triangle's first corner by `−g`; pinned vertices (fixed at 0) drop out.
+fn assemble_edge_rhs(
+    faces: &[Face],
+    template_edges: &[[Vec3; 2]],
+    free_index: &[u32],
+    free_count: usize,
+    gradients: &[Mat3],
+) -> Mat<Real> {
+    let mut rhs = Mat::<Real>::zeros(free_count, 3);
+    let mut add = |vertex: u32, g: &Vec3| {
+        let row = free_index[vertex as usize];
+        if row != PINNED {
+            for axis in 0..3 {
+                rhs[(row as usize, axis)] += g[axis];
+            }
+        }
+    };
+    for ((&[v1, v2, v3], edges), gradient) in faces.iter().zip(template_edges).zip(gradients) {
+        for (far, edge) in [(v2, &edges[0]), (v3, &edges[1])] {
+            let g = gradient * edge;
+            add(far, &g);
+            add(v1, &-g);
+        }
+    }
+    rhs
+}
+
+fn solve_llt_in_place(symbolic: &SymbolicCholesky<usize>, factor_values: &[Real], rhs: &mut Mat<Real>) {
+    let req = symbolic.solve_in_place_req::<Real>(3).expect("workspace size of a 3-column solve");
+    let mut buffer = GlobalPodBuffer::new(req);
+    LltRef::<usize, Real>::new(symbolic, factor_values).solve_in_place_with_conj(
+        Conj::No,
+        rhs.as_mut(),
+        Parallelism::None,
+        PodStack::new(&mut buffer),
+    );
+}
+
+fn row_of(solution: &Mat<Real>, r: usize) -> Vec3 {
+    Vec3::new(solution[(r, 0)], solution[(r, 1)], solution[(r, 2)])
 }
 
 /// Connected components of the vertex graph of `faces` (union–find), numbered in order
@@ -231,14 +319,16 @@ fn component_centroid_offsets(template: &[Vec3], component: &[u32]) -> Vec<Vec3>
 }
 
 /// Assembles the lower triangle of the reduced Laplacian (two edges per face, unit
-/// weights) and factorises it: symbolic analysis with an AMD ordering, then a numeric
-/// LLT.
+/// weights) plus `diagonal[row]` on its diagonal (none when `diagonal` is empty) and
+/// factorises it: symbolic analysis with an AMD ordering, then a numeric LLT.
 fn factorise_laplacian(
     faces: &[Face],
     free_index: &[u32],
     free_count: usize,
+    diagonal: &[Real],
 ) -> Result<(SymbolicCholesky<usize>, Vec<Real>), EvalError> {
-    let mut triplets: Vec<(usize, usize, Real)> = Vec::with_capacity(faces.len() * 6);
+    let mut triplets: Vec<(usize, usize, Real)> = Vec::with_capacity(faces.len() * 6 + diagonal.len());
+    triplets.extend(diagonal.iter().enumerate().map(|(row, &w)| (row, row, w)));
     for &[v1, v2, v3] in faces {
         for far in [v2, v3] {
             let (a, b) = (free_index[v1 as usize], free_index[far as usize]);

@@ -45,7 +45,8 @@ fn model_reproduces_its_training_poses() {
     let poses = tube.pose_set(5, 3);
     let rotations = part_rotations(&poses, &tube.labels);
     let all: Vec<usize> = (0..poses.pose_count()).collect();
-    let config = ModelConfig { ridge: 1e-12, ..ModelConfig::default() };
+    let config =
+        ModelConfig { ridge: 1e-12, regression: desal_eval::Regression::Fixed, ..ModelConfig::default() };
     let model = fit_model(&poses, &tube.labels, &rotations, &all, &config).unwrap();
     assert_eq!(model.report().joint_count, 2);
     assert!(model.report().mean_q_residual < 1e-12, "{:?}", model.report());
@@ -138,9 +139,16 @@ fn scape_held_out_error() {
     let (poses, labels): (PoseSet, _) = common::load_scape(&dir);
     let rotations = part_rotations(&poses, &labels);
     let mut errors = Vec::new();
+    // The pre-issue-17 model (fixed ridge, centroid placement): tests/floor.rs has the
+    // new defaults.
+    let config = ModelConfig {
+        regression: desal_eval::Regression::Fixed,
+        anchoring: desal_eval::Anchoring::Centroid,
+        ..ModelConfig::default()
+    };
     for test in folds(poses.pose_count(), poses.template, 5) {
         let train = training_poses(poses.pose_count(), &test);
-        let model = fit_model(&poses, &labels, &rotations, &train, &ModelConfig::default()).unwrap();
+        let model = fit_model(&poses, &labels, &rotations, &train, &config).unwrap();
         for &p in &test {
             let target = poses.pose_mesh(p);
             let positions = model.synthesize(&rotations[p], centroid(&target.positions)).unwrap();
@@ -185,4 +193,84 @@ fn check_scape_in_sample(pose_stride: usize) {
         model.report()
     );
     assert!(model_v2v < 0.8 * rigid_v2v, "model {model_v2v:e} m² vs rigid parts {rigid_v2v:e} m²");
+}
+
+/// Three disjoint tube segments (parts 0, 1, 2 along x, no triangle across a border):
+/// the worst case for centroid placement, which can only keep each component at its
+/// template offset from the overall centroid.
+fn broken_chain() -> (PoseSet, desal_mesh::PartLabels) {
+    let segment = Tube::new(6, 8);
+    let shrink = |p: &Vec3| Vec3::new(p.x / 3.0, p.y, p.z);
+    let (mut template, mut faces, mut labels) = (Vec::new(), Vec::new(), Vec::new());
+    for part in 0..3u32 {
+        let base = template.len() as u32;
+        template.extend(segment.template.iter().map(|p| shrink(p) + Vec3::new(1.1 * part as f64, 0.0, 0.0)));
+        faces.extend(segment.faces.iter().map(|f| f.map(|v| v + base)));
+        labels.extend(std::iter::repeat_n(part, segment.template.len()));
+    }
+    let poses = PoseSet::try_new(vec!["t".into()], vec![template], faces, 0).unwrap();
+    (poses, desal_mesh::PartLabels::from_ids(labels))
+}
+
+/// Issue 17: part-anchored synthesis reproduces a chain whose parts each move rigidly —
+/// here three separate segments, each turned and moved its own way — exactly: the
+/// gradients (`Q = I`, fitted on the template alone) are the parts' rotations and the
+/// anchors their motions, so both terms vanish at the true pose. Centroid placement
+/// cannot: it misplaces every segment by centimetres to decimetres.
+#[test]
+fn anchoring_reproduces_a_rigidly_moved_chain() {
+    use desal_eval::{Anchoring, PartTransform, Regression};
+    let (poses, labels) = broken_chain();
+    let transforms: Vec<PartTransform> = (0..3)
+        .map(|k| PartTransform {
+            rotation: common::rotation(Vec3::new(0.2 * k as f64, -0.4, 0.3 + 0.5 * k as f64)),
+            translation: Vec3::new(0.3, -0.1 * k as f64, 0.7 * k as f64),
+        })
+        .collect();
+    let truth: Vec<Vec3> =
+        poses.poses[0].iter().zip(&labels.labels).map(|(x, &p)| transforms[p as usize].apply(x)).collect();
+    let rotations = vec![desal_eval::rotations_of(&[PartTransform::identity(); 3])];
+    for scale in [0.01, 0.1, 1.0] {
+        let config = ModelConfig {
+            regression: Regression::Fixed,
+            anchoring: Anchoring::Parts { scale },
+            ..Default::default()
+        };
+        let model = fit_model(&poses, &labels, &rotations, &[0], &config).unwrap();
+        assert!(model.is_anchored());
+        let got = model.synthesize_from_parts(&transforms, Vec3::zeros()).unwrap();
+        assert!(max_distance(&got, &truth) < 1e-10, "scale {scale}: {}", max_distance(&got, &truth));
+    }
+    let config =
+        ModelConfig { regression: Regression::Fixed, anchoring: Anchoring::Centroid, ..Default::default() };
+    let model = fit_model(&poses, &labels, &rotations, &[0], &config).unwrap();
+    let got = model.synthesize_from_parts(&transforms, centroid(&truth)).unwrap();
+    assert!(max_distance(&got, &truth) > 0.05, "centroid placement: {}", max_distance(&got, &truth));
+}
+
+/// Issue 17: on the skinned tube, held out, anchoring the parts' translations beats the
+/// centroid: the regression's residual no longer accumulates down the chain. The tube
+/// blends its bones over ±0.2 around each joint, so the anchors' length `ℓ` must not be
+/// much shorter than that, or the pull towards the rigid parts creases the blend: at
+/// scale 0.1 (`ℓ` = 0.24 on this tube) anchoring wins; at the default 0.02 (`ℓ` = 0.05,
+/// tuned on bodies whose blend zones are a few centimetres) it does not, and the test
+/// says so.
+#[test]
+fn anchoring_beats_the_centroid_on_held_out_poses() {
+    use desal_eval::{Anchoring, PoseModel};
+    let tube = Tube::new(31, 12);
+    let poses = tube.pose_set(24, 5);
+    let transforms = common::part_transforms(&poses, &tube.labels);
+    let held_out_v2v = |anchoring| {
+        let model = PoseModel::Scape(ModelConfig { anchoring, ..ModelConfig::default() });
+        desal_eval::model_floor(&poses, &tube.labels, &transforms, &model, 4).unwrap().held_out.v2v
+    };
+    let wide = held_out_v2v(Anchoring::Parts { scale: 0.1 });
+    let narrow = held_out_v2v(Anchoring::Parts { scale: desal_eval::DEFAULT_ANCHOR_SCALE });
+    let centroid = held_out_v2v(Anchoring::Centroid);
+    eprintln!(
+        "tube held-out v2v: anchored 0.1 {wide:.3e}, anchored 0.02 {narrow:.3e}, centroid {centroid:.3e}"
+    );
+    assert!(wide < centroid, "anchored {wide:e} vs centroid {centroid:e}");
+    assert!(narrow > wide, "narrow {narrow:e} vs wide {wide:e}");
 }

@@ -152,3 +152,39 @@ pub fn load_scape(dir: &Path) -> (PoseSet, PartLabels) {
     let labels = desal_io::labels::read_labels(&dir.join("vertex_part_labels_16.txt")).unwrap();
     (pose_set, labels)
 }
+
+/// `transforms[pose][part]`: stage 1's rigid fit (desal-fit, the real stage) of each part
+/// from the template to each pose, as the models take it.
+pub fn part_transforms(poses: &PoseSet, labels: &PartLabels) -> Vec<Vec<desal_eval::PartTransform>> {
+    let fit =
+        desal_fit::fit_pose_set(poses, labels, &desal_fit::FitConfig::default(), &desal_mesh::NoProgress)
+            .expect("stage 1 fits the pose set");
+    fit.part_fits
+        .iter()
+        .map(|parts| {
+            parts
+                .iter()
+                .map(|f| desal_eval::PartTransform { rotation: f.linear, translation: f.translation })
+                .collect()
+        })
+        .collect()
+}
+
+/// The bundled sample (`data-samples/`, 11 MakeHuman poses, template `00_rest`) and its
+/// 16-part labels. It ships with the repository, so it is never absent.
+pub fn load_sample() -> (PoseSet, PartLabels) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data-samples");
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir.join("poses"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "ply"))
+        .collect();
+    paths.sort();
+    let meshes: Vec<_> = paths.iter().map(|p| desal_io::read_mesh(p).unwrap()).collect();
+    let names = paths.iter().map(|p| p.file_stem().unwrap().to_string_lossy().into_owned()).collect();
+    let faces = meshes[0].faces.clone();
+    let poses = meshes.into_iter().map(|m| m.positions).collect();
+    let pose_set = PoseSet::try_new(names, poses, faces, 0).unwrap();
+    let labels = desal_io::labels::read_labels(&dir.join("labels.json")).unwrap();
+    (pose_set, labels)
+}
