@@ -4,6 +4,7 @@ mod artifacts;
 mod cache;
 mod eval;
 mod ingest;
+mod parts;
 mod stages;
 mod support;
 mod tidy;
