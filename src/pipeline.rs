@@ -326,6 +326,24 @@ target_vertices = 50
         assert!(err.contains("colour"), "{err}");
     }
 
+    /// `labels = "auto"` with `parts = K` or a `[dataset.parts]` table; any other string
+    /// is a labels file.
+    #[test]
+    fn auto_labels_take_a_count_or_a_table() {
+        let p = Path::new("/data/x.toml");
+        let head = "schema = 1\n[[dataset]]\nname='a'\nposes=['x.ply']\n";
+        let d = parse(p, &format!("{head}labels='auto'\nparts=16\n"), None).unwrap().datasets.remove(0);
+        assert_eq!(d.labels, LabelsSource::Auto);
+        assert_eq!(d.spec.parts, PartsParams { count: Some(16), ..PartsParams::default() });
+        let text = format!("{head}labels='auto'\n[dataset.parts]\ncount=3\npatches=64\n");
+        let d = parse(p, &text, None).unwrap().datasets.remove(0);
+        assert_eq!(d.spec.parts, PartsParams { count: Some(3), patches: Some(64), ..PartsParams::default() });
+        let d = parse(p, &format!("{head}labels='./auto'\n"), None).unwrap().datasets.remove(0);
+        assert_eq!(d.labels, LabelsSource::File(PathBuf::from("/data/./auto")));
+        let err = format!("{:#}", parse(p, &format!("{head}labels='auto'\nparts=0\n"), None).unwrap_err());
+        assert!(err.contains("parts"), "{err}");
+    }
+
     #[test]
     fn dataset_names_stay_inside_the_output_root() {
         let p = Path::new("x.toml");
