@@ -364,6 +364,58 @@ fn read_saliency_values(path: &Path) -> Result<Vec<f64>> {
         .collect()
 }
 
+/// `desal parts`: near-rigid parts discovered from an ingested pose set, written as the
+/// labels artifact `labels = "auto"` gives (byte for byte).
+#[derive(Debug, clap::Args)]
+pub struct PartsArgs {
+    /// Pose-set artifact (`poses.dsa` from `desal run`).
+    #[arg(long)]
+    pub poses: PathBuf,
+    /// The number of parts; absent: chosen at the knee of the residual curve.
+    #[arg(long)]
+    pub parts: Option<usize>,
+    /// Where to write the labels artifact.
+    #[arg(long, short)]
+    pub output: PathBuf,
+    /// Also write the labels as text here (one id per vertex, `# parts:` header).
+    #[arg(long)]
+    pub txt: Option<PathBuf>,
+    /// Also draw the parts on the template here (PNG).
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Up axis for the picture (x, y, z, optionally signed); detected when absent.
+    #[arg(long)]
+    pub up_axis: Option<String>,
+}
+
+pub fn parts(args: &PartsArgs) -> Result<()> {
+    let (poses, poses_hash) = read::<PoseSetV1>(&args.poses)?;
+    let set = poses.to_pose_set().with_context(|| format!("{}", args.poses.display()))?;
+    let params = stages::parts::PartsParams { count: args.parts, ..Default::default() };
+    let key = params.key(poses_hash)?;
+    let up = crate::pictures::parse_up_axis(args.up_axis.as_deref())?;
+    let out = stages::parts::compute(&params, &set)?;
+    let labels = out.body.to_labels()?;
+    // Everything is rendered before anything is written: all files or none.
+    let producer = key.producer(&[]);
+    let body = out.body;
+    let mut files: Vec<(PathBuf, FileWriter)> = vec![(
+        args.output.clone(),
+        Box::new(move |p| Ok(artifact::write_artifact(p, &producer, &body).map(|_| ())?)),
+    )];
+    if let Some(path) = &args.txt {
+        let text = stages::parts::labels_txt(&labels);
+        files.push((path.clone(), Box::new(move |p| Ok(desal_io::write_atomic(p, text.as_bytes())?))));
+    }
+    if let Some(path) = &args.png {
+        let png = crate::pictures::parts_png(&set.template_mesh(), &labels, up)?;
+        files.push((path.clone(), Box::new(move |p| Ok(desal_io::write_atomic(p, &png)?))));
+    }
+    write_all_or_nothing(files)?;
+    done(&out.note, &args.output);
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

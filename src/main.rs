@@ -52,6 +52,8 @@ enum Command {
         #[arg(long)]
         explain: bool,
     },
+    /// Part labels discovered from a pose-set artifact (what `labels = "auto"` runs).
+    Parts(desal::cli::PartsArgs),
     /// Stage 1 alone: per-part rigid fit on artifacts.
     Fit(desal::cli::FitArgs),
     /// Stage 2 alone: deformation saliency from a fit.
@@ -117,6 +119,7 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", desal::run::summary_table(&reports));
             Ok(())
         }
+        Command::Parts(args) => desal::cli::parts(&args),
         Command::Fit(args) => desal::cli::fit(&args),
         Command::Saliency(args) => desal::cli::saliency(&args),
         Command::Simplify(args) => desal::cli::simplify(&args),

@@ -7,6 +7,7 @@
 //! | `poses.dsa`, `labels.dsa`, `fit.dsa`, `saliency.dsa`, `simplified.dsa`, `map.dsa` | the stages' cache entries, copied (never linked: nothing done to the output folder reaches the cache) |
 //! | `<stage>.json` | each stage's typed summary |
 //! | `saliency.png`, `saliency.ply` | the saliency drawn on the template |
+//! | `labels.txt`, `parts.png`, `parts.json` | with `labels = "auto"`: the discovered parts (text, drawn on the template, the discovery's figures) |
 //! | `simplified-template-raw.ply` | stage 3's template before mapping |
 //! | `simplified/<pose>.ply`, `simplified/parts.txt`, `vertex_map.txt` | the registered simplified pose set |
 //! | `report.json` | the run's report, with `outputs_key` |
@@ -95,6 +96,9 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
     outputs.files.extend(simplified_pose_set("simplified/", map, simple_set, simple_labels));
     add_artifact(&mut outputs, "poses", &stages.poses.artifact_path, &stages.poses.summary);
     add_artifact(&mut outputs, "labels", &stages.labels.artifact_path, &stages.labels.summary);
+    if let Some(parts) = &stages.parts {
+        add_parts_files(&mut outputs, set.template_mesh(), part_labels, parts, up_axis)?;
+    }
     add_artifact(&mut outputs, "fit", &stages.fit.artifact_path, &stages.fit.summary);
     add_artifact(&mut outputs, "saliency", &stages.saliency.artifact_path, &stages.saliency.summary);
     add_artifact(&mut outputs, "simplified", &stages.simplified.artifact_path, &stages.simplified.summary);
@@ -124,6 +128,26 @@ fn add_saliency_pictures(
         "saliency.ply".into(),
         Box::new(move |p| crate::pictures::write_scalar_ply(p, &template, "saliency", &saliency)),
     ));
+    Ok(())
+}
+
+/// `labels.txt`, `parts.png` and `parts.json` of discovered parts (`labels = "auto"`).
+fn add_parts_files(
+    outputs: &mut DatasetOutputs,
+    template: TriMesh,
+    labels: &PartLabels,
+    summary: &crate::stages::parts::PartsSummary,
+    up_axis: Option<&str>,
+) -> Result<()> {
+    let up = crate::pictures::parse_up_axis(up_axis)?;
+    let png = crate::pictures::parts_png(&template, labels, up)?;
+    let text = crate::stages::parts::labels_txt(labels);
+    outputs
+        .files
+        .push(("labels.txt".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, text.as_bytes())?))));
+    outputs.files.push(("parts.png".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, &png)?))));
+    let summary = serde_json::to_value(summary).expect("summaries serialise");
+    outputs.files.push(("parts.json".into(), Box::new(move |p| Ok(desal_io::write_json(p, &summary)?))));
     Ok(())
 }
 

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::{Result, bail};
 use desal_io::ply::{PlyWriteOptions, write_ply};
-use desal_mesh::TriMesh;
+use desal_mesh::{PartLabels, TriMesh};
 use desal_viz::{Direction, RenderConfig, Scalar};
 
 /// Parses a pipeline's `up_axis` ("x", "-y", "+z", ...); `None` means detect it.
@@ -51,4 +51,30 @@ pub fn write_scalar_ply(path: &Path, mesh: &TriMesh, name: &str, values: &[f64])
     };
     write_ply(path, mesh, &options)?;
     Ok(())
+}
+
+/// The parts on the template, one colour each, as PNG bytes (`parts.png`): each face
+/// takes the part of the majority of its corners (ties: its first corner's), and part
+/// `k` the colour-map value `frac(k · φ)`, so parts with neighbouring ids get far-apart
+/// colours.
+pub fn parts_png(mesh: &TriMesh, labels: &PartLabels, up: Option<Direction>) -> Result<Vec<u8>> {
+    let golden = (5f64.sqrt() - 1.0) / 2.0;
+    let values: Vec<f64> = mesh
+        .faces
+        .iter()
+        .map(|f| {
+            let [a, b, c] = f.map(|v| labels.labels[v as usize]);
+            let part = if b == c { b } else { a };
+            (part as f64 * golden).fract()
+        })
+        .collect();
+    let config = RenderConfig {
+        up,
+        title: format!("{} parts", labels.part_count()),
+        range: Some((0.0, 1.0)),
+        colour_bar: false,
+        ..RenderConfig::default()
+    };
+    let image = desal_viz::render_heatmap(mesh, Scalar::PerFace(&values), &config)?;
+    Ok(desal_viz::encode_png(&image)?)
 }

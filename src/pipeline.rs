@@ -10,11 +10,12 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 
-use crate::stages::DatasetInputs;
 use crate::stages::fit::FitParams;
 use crate::stages::ingest::{IngestParams, TemplateSpec, pose_name};
+use crate::stages::parts::PartsParams;
 use crate::stages::saliency::SaliencyParams;
 use crate::stages::simplify::{SimplifyParams, TARGET_KEYS};
+use crate::stages::{DatasetInputs, LabelsInput};
 
 /// The pipeline file schema this build reads.
 pub const SCHEMA: u32 = 1;
@@ -42,8 +43,11 @@ pub struct DatasetToml {
     /// The template: a pose file name or stem, or a 0-based index into the sorted list.
     #[serde(default)]
     pub template: Option<TemplateSpec>,
-    /// Part labels file (text or JSON).
-    pub labels: String,
+    /// Part labels file (text or JSON), or `"auto"`: parts discovered from the poses.
+    pub labels: LabelsSpec,
+    /// Part discovery with `labels = "auto"`: `parts = K`, or a `[dataset.parts]` table.
+    #[serde(default, deserialize_with = "crate::stages::parts::count_or_table")]
+    pub parts: PartsParams,
     /// Use the template's triangles for every pose instead of requiring identical lists.
     #[serde(default)]
     pub ignore_pose_faces: bool,
@@ -56,6 +60,36 @@ pub struct DatasetToml {
     pub saliency: SaliencyParams,
     #[serde(default)]
     pub simplify: SimplifyParams,
+}
+
+/// `labels = "auto"` or a labels file path (a file literally named `auto` is `./auto`).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(from = "String", into = "String")]
+pub enum LabelsSpec {
+    File(String),
+    Auto,
+}
+
+impl From<String> for LabelsSpec {
+    fn from(text: String) -> Self {
+        if text == "auto" { LabelsSpec::Auto } else { LabelsSpec::File(text) }
+    }
+}
+
+impl From<LabelsSpec> for String {
+    fn from(spec: LabelsSpec) -> Self {
+        match spec {
+            LabelsSpec::File(path) => path,
+            LabelsSpec::Auto => "auto".into(),
+        }
+    }
+}
+
+/// Where a dataset's labels come from, with the file's path absolute.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LabelsSource {
+    File(PathBuf),
+    Auto,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -71,7 +105,7 @@ pub struct Dataset {
     pub spec: DatasetToml,
     /// Pose files, sorted (glob) or in the listed order.
     pub pose_files: Vec<PathBuf>,
-    pub labels_file: PathBuf,
+    pub labels: LabelsSource,
     /// Where this dataset's outputs go.
     pub out_dir: PathBuf,
 }
@@ -85,7 +119,10 @@ impl Dataset {
                 template: self.spec.template.as_ref(),
                 ignore_pose_faces: self.spec.ignore_pose_faces,
             },
-            labels_file: &self.labels_file,
+            labels: match &self.labels {
+                LabelsSource::File(file) => LabelsInput::File(file),
+                LabelsSource::Auto => LabelsInput::Auto(&self.spec.parts),
+            },
             fit: &self.spec.fit,
             saliency: &self.spec.saliency,
             simplify: &self.spec.simplify,
@@ -146,9 +183,12 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
         // Every stage parameter is checked now, before any stage runs.
         check_parameters(&spec, &pose_files)
             .with_context(|| format!("{}: dataset '{}'", path.display(), spec.name))?;
-        let labels_file = base.join(&spec.labels);
+        let labels = match &spec.labels {
+            LabelsSpec::File(file) => LabelsSource::File(base.join(file)),
+            LabelsSpec::Auto => LabelsSource::Auto,
+        };
         let out_dir = out_root.join(&spec.name);
-        datasets.push(Dataset { spec, pose_files, labels_file, out_dir });
+        datasets.push(Dataset { spec, pose_files, labels, out_dir });
     }
     Ok(Pipeline { path: path.to_owned(), out_root, datasets })
 }
@@ -165,6 +205,15 @@ fn check_parameters(spec: &DatasetToml, pose_files: &[PathBuf]) -> Result<()> {
         );
     }
     spec.simplify.config()?;
+    match spec.labels {
+        LabelsSpec::Auto => {
+            spec.parts.config()?;
+        }
+        LabelsSpec::File(_) if spec.parts != PartsParams::default() => {
+            bail!("`parts` applies to `labels = \"auto\"` only; this dataset reads its labels from a file")
+        }
+        LabelsSpec::File(_) => {}
+    }
     crate::pictures::parse_up_axis(spec.up_axis.as_deref())?;
     Ok(())
 }
@@ -263,7 +312,7 @@ target_vertices = 50
             SimplifyParams::default().balance,
             "unset keys keep their defaults"
         );
-        assert_eq!(d.labels_file, dir.path().join("labels.txt"));
+        assert_eq!(d.labels, LabelsSource::File(dir.path().join("labels.txt")));
         assert_eq!(d.out_dir, dir.path().join("results").join("one"));
     }
 
@@ -275,6 +324,24 @@ target_vertices = 50
         let bad = "schema = 1\n[[dataset]]\nname='a'\nposes=['x.ply']\nlabels='l'\ncolour='red'\n";
         let err = format!("{:#}", parse(p, bad, None).unwrap_err());
         assert!(err.contains("colour"), "{err}");
+    }
+
+    /// `labels = "auto"` with `parts = K` or a `[dataset.parts]` table; any other string
+    /// is a labels file.
+    #[test]
+    fn auto_labels_take_a_count_or_a_table() {
+        let p = Path::new("/data/x.toml");
+        let head = "schema = 1\n[[dataset]]\nname='a'\nposes=['x.ply']\n";
+        let d = parse(p, &format!("{head}labels='auto'\nparts=16\n"), None).unwrap().datasets.remove(0);
+        assert_eq!(d.labels, LabelsSource::Auto);
+        assert_eq!(d.spec.parts, PartsParams { count: Some(16), ..PartsParams::default() });
+        let text = format!("{head}labels='auto'\n[dataset.parts]\ncount=3\npatches=64\n");
+        let d = parse(p, &text, None).unwrap().datasets.remove(0);
+        assert_eq!(d.spec.parts, PartsParams { count: Some(3), patches: Some(64), ..PartsParams::default() });
+        let d = parse(p, &format!("{head}labels='./auto'\n"), None).unwrap().datasets.remove(0);
+        assert_eq!(d.labels, LabelsSource::File(PathBuf::from("/data/./auto")));
+        let err = format!("{:#}", parse(p, &format!("{head}labels='auto'\nparts=0\n"), None).unwrap_err());
+        assert!(err.contains("parts"), "{err}");
     }
 
     #[test]

@@ -9,6 +9,7 @@
 pub mod fit;
 pub mod ingest;
 pub mod map;
+pub mod parts;
 pub mod runner;
 pub mod saliency;
 pub mod simplify;
@@ -23,6 +24,7 @@ use desal_mesh::{PartLabels, PoseSet, Progress};
 use fit::{FitParams, FitSummary};
 use ingest::{IngestParams, IngestSummary, LabelsSummary};
 use map::MapSummary;
+use parts::{PartsParams, PartsSummary};
 use runner::{Stage, StageRunner, Staged};
 use saliency::{SaliencyParams, SaliencySummary};
 use simplify::{SimplifyParams, SimplifySummary};
@@ -31,10 +33,17 @@ use simplify::{SimplifyParams, SimplifySummary};
 #[derive(Debug, Clone, Copy)]
 pub struct DatasetInputs<'a> {
     pub ingest: IngestParams<'a>,
-    pub labels_file: &'a Path,
+    pub labels: LabelsInput<'a>,
     pub fit: &'a FitParams,
     pub saliency: &'a SaliencyParams,
     pub simplify: &'a SimplifyParams,
+}
+
+/// Where a dataset's part labels come from: a labels file, or discovery from the poses.
+#[derive(Debug, Clone, Copy)]
+pub enum LabelsInput<'a> {
+    File(&'a Path),
+    Auto(&'a PartsParams),
 }
 
 /// The stages of one dataset, run or found in the cache. Bodies are decoded lazily, the
@@ -43,6 +52,8 @@ pub struct DatasetInputs<'a> {
 pub struct DatasetStages {
     pub poses: Staged<PoseSetV1, IngestSummary>,
     pub labels: Staged<LabelsV1, LabelsSummary>,
+    /// The discovery's figures when the labels are `auto` (`parts.json`).
+    pub parts: Option<PartsSummary>,
     pub fit: Staged<FitV1, FitSummary>,
     pub saliency: Staged<SaliencyV1, SaliencySummary>,
     pub simplified: Staged<SimplifiedV1, SimplifySummary>,
@@ -94,11 +105,21 @@ pub fn run_stages(
     let set_cell = OnceCell::new();
     let set = || -> Result<&PoseSet> { get_or_try_init(&set_cell, || Ok(poses.body()?.to_pose_set()?)) };
 
-    // Labels: validated against the pose set; keyed on the labels file's bytes.
-    let key = ingest::labels_key(inputs.labels_file, poses.hash)?;
-    let hints = vec![("labels_file".to_owned(), ingest::file_name(inputs.labels_file))];
-    let labels =
-        runner.stage(Stage::Ingest, key, &hints, || ingest::compute_labels(inputs.labels_file, set()?))?;
+    // Labels: a file validated against the pose set and keyed on its bytes, or parts
+    // discovered from the poses and keyed on their parameters and the poses' hash.
+    let (labels, parts_summary) = match inputs.labels {
+        LabelsInput::File(file) => {
+            let key = ingest::labels_key(file, poses.hash)?;
+            let hints = vec![("labels_file".to_owned(), ingest::file_name(file))];
+            (runner.stage(Stage::Ingest, key, &hints, || ingest::compute_labels(file, set()?))?, None)
+        }
+        LabelsInput::Auto(params) => {
+            let key = params.key(poses.hash)?;
+            let found = runner.stage(Stage::Parts, key, &[], || parts::compute(params, set()?))?;
+            let summary = found.summary.clone();
+            (found.map_summary(|s| s.labels_summary()), Some(summary))
+        }
+    };
     let labels_cell = OnceCell::new();
     let part_labels =
         || -> Result<&PartLabels> { get_or_try_init(&labels_cell, || Ok(labels.body()?.to_labels()?)) };
@@ -135,6 +156,7 @@ pub fn run_stages(
     Ok(DatasetStages {
         poses,
         labels,
+        parts: parts_summary,
         fit: fitted,
         saliency: salient,
         simplified,

@@ -20,6 +20,8 @@ use crate::progress::Bars;
 #[serde(rename_all = "lowercase")]
 pub enum Stage {
     Ingest,
+    /// Part discovery (`labels = "auto"`); a labels file is read with ingest.
+    Parts,
     Fit,
     Saliency,
     Simplify,
@@ -67,6 +69,19 @@ pub struct Staged<T, S> {
     pub summary: S,
     /// The cache entry's artifact file (copied into the output folder).
     pub artifact_path: PathBuf,
+}
+
+impl<T, S> Staged<T, S> {
+    /// The same stage output with its summary converted (the parts stage's output seen
+    /// as the labels stage's).
+    pub fn map_summary<S2>(self, f: impl FnOnce(S) -> S2) -> Staged<T, S2> {
+        Staged {
+            body: self.body,
+            hash: self.hash,
+            summary: f(self.summary),
+            artifact_path: self.artifact_path,
+        }
+    }
 }
 
 impl<T: ArtifactBody, S> Staged<T, S> {

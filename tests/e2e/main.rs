@@ -5,6 +5,7 @@ mod cache;
 mod eval;
 mod faults;
 mod ingest;
+mod parts;
 mod stages;
 mod support;
 mod tidy;

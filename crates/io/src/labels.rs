@@ -153,6 +153,11 @@ fn parse_names_comment(comment: &str) -> Vec<(u32, String)> {
 
 /// Writes labels as text: a comment naming the parts, then one id per line.
 pub fn write_labels_txt(path: &Path, labels: &PartLabels) -> Result<(), IoError> {
+    crate::atomic::write_atomic(path, labels_txt(labels).as_bytes())
+}
+
+/// The text [`write_labels_txt`] writes, for callers that add their own header comments.
+pub fn labels_txt(labels: &PartLabels) -> String {
     let mut text = String::with_capacity(labels.labels.len() * 3 + 64);
     text.push_str("# one line per vertex, value = part id\n# ids: ");
     let names: Vec<String> = labels.names.iter().enumerate().map(|(k, n)| format!("{k}={n}")).collect();
@@ -162,7 +167,7 @@ pub fn write_labels_txt(path: &Path, labels: &PartLabels) -> Result<(), IoError>
         text.push_str(&id.to_string());
         text.push('\n');
     }
-    crate::atomic::write_atomic(path, text.as_bytes())
+    text
 }
 
 /// Writes labels as JSON.

@@ -32,3 +32,8 @@ pub use config::PartsConfig;
 pub use discover::{discover_parts, refine_parts};
 pub use error::PartsError;
 pub use report::{CurvePoint, PartsReport};
+
+/// Version of this stage's output (the discovered labels). The driver's cache key carries
+/// it, so bump it in the same commit as any change that alters the labels for the same
+/// pose set and config.
+pub const VERSION: u32 = 1;
