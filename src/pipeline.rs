@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::stages::DatasetInputs;
 use crate::stages::fit::FitParams;
+use crate::stages::hierarchy::HierarchyParams;
 use crate::stages::ingest::{IngestParams, TemplateSpec, pose_name};
 use crate::stages::saliency::SaliencyParams;
 use crate::stages::simplify::{SimplifyParams, TARGET_KEYS};
@@ -56,6 +57,9 @@ pub struct DatasetToml {
     pub saliency: SaliencyParams,
     #[serde(default)]
     pub simplify: SimplifyParams,
+    /// `[dataset.hierarchy]`: coarse levels for mesh networks (absent: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hierarchy: Option<HierarchyParams>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -89,6 +93,7 @@ impl Dataset {
             fit: &self.spec.fit,
             saliency: &self.spec.saliency,
             simplify: &self.spec.simplify,
+            hierarchy: self.spec.hierarchy.as_ref(),
         }
     }
 }
@@ -165,6 +170,9 @@ fn check_parameters(spec: &DatasetToml, pose_files: &[PathBuf]) -> Result<()> {
         );
     }
     spec.simplify.config()?;
+    if let Some(h) = &spec.hierarchy {
+        h.config()?;
+    }
     crate::pictures::parse_up_axis(spec.up_axis.as_deref())?;
     Ok(())
 }

@@ -14,7 +14,10 @@ fn mean(v: &[f64]) -> f64 {
 }
 
 #[test]
-#[cfg_attr(not(desal_shared_data), ignore = "needs ../shared/datasets beside the checkout (development and CI only)")]
+#[cfg_attr(
+    not(desal_shared_data),
+    ignore = "needs ../shared/datasets beside the checkout (development and CI only)"
+)]
 fn fitted_upsampler_meets_the_issue_targets() {
     let Some((full, labels)) = desal_testdata::scape() else { return };
     let even: Vec<usize> = (0..full.pose_count()).filter(|p| p % 2 == 0).collect();

@@ -61,7 +61,10 @@ fn print_curve(report: &PartsReport) {
 }
 
 #[test]
-#[cfg_attr(not(desal_shared_data), ignore = "needs ../shared/datasets beside the checkout (development and CI only)")]
+#[cfg_attr(
+    not(desal_shared_data),
+    ignore = "needs ../shared/datasets beside the checkout (development and CI only)"
+)]
 fn scape_sixteen_parts_match_the_hand_made_ones() {
     let Some((poses, given)) = desal_testdata::scape() else { return };
     let config = PartsConfig { parts: Some(16), ..PartsConfig::default() };
@@ -89,7 +92,10 @@ fn scape_sixteen_parts_match_the_hand_made_ones() {
 }
 
 #[test]
-#[cfg_attr(not(desal_shared_data), ignore = "needs ../shared/datasets beside the checkout (development and CI only)")]
+#[cfg_attr(
+    not(desal_shared_data),
+    ignore = "needs ../shared/datasets beside the checkout (development and CI only)"
+)]
 fn scape_knee_curve() {
     let Some((poses, _)) = desal_testdata::scape() else { return };
     let (auto, report) = discover_parts(&poses, &PartsConfig::default()).unwrap();
@@ -103,7 +109,10 @@ fn scape_knee_curve() {
 /// The figure behind the module doc's "why": the hand-made parts, their borders relaxed
 /// by discovery's own rule (up to 200 sweeps), fit better but move away from themselves.
 #[test]
-#[cfg_attr(not(desal_shared_data), ignore = "needs ../shared/datasets beside the checkout (development and CI only)")]
+#[cfg_attr(
+    not(desal_shared_data),
+    ignore = "needs ../shared/datasets beside the checkout (development and CI only)"
+)]
 fn scape_relaxing_the_hand_made_borders() {
     let Some((poses, given)) = desal_testdata::scape() else { return };
     let config = PartsConfig { relax_sweeps: 200, ..PartsConfig::default() };
@@ -123,7 +132,10 @@ fn scape_relaxing_the_hand_made_borders() {
 /// The real data at full size: one and two rayon threads give the same labels and the
 /// same knee curve, bit for bit.
 #[test]
-#[cfg_attr(not(desal_shared_data), ignore = "needs ../shared/datasets beside the checkout (development and CI only)")]
+#[cfg_attr(
+    not(desal_shared_data),
+    ignore = "needs ../shared/datasets beside the checkout (development and CI only)"
+)]
 fn scape_labels_do_not_depend_on_the_thread_count() {
     let Some((poses, _)) = desal_testdata::scape() else { return };
     let config = PartsConfig { parts: Some(16), ..PartsConfig::default() };

@@ -161,3 +161,30 @@ pub struct MapV1 {
 impl ArtifactBody for MapV1 {
     const KIND: ArtifactKind = ArtifactKind::Map;
 }
+
+/// One level step k → k+1 of a hierarchy (stage `hierarchy`, one artifact per level).
+/// Index spaces: `fine_idx` is level k's vertex index, `coarse_idx` level k+1's,
+/// `orig_idx` level 0's. D and A are not stored: they follow from `coarse_to_fine` and
+/// `faces` (`desal_hierarchy::{selection, adjacency}`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HierarchyLevelV1 {
+    /// `fine_vertices = n_k`.
+    pub fine_vertices: u32,
+    /// `coarse_to_fine[coarse_idx] = fine_idx` (`map{k+1}`), distinct.
+    pub coarse_to_fine: Vec<u32>,
+    /// `coarse_to_orig[coarse_idx] = orig_idx` (`orig{k+1}`).
+    pub coarse_to_orig: Vec<u32>,
+    /// The coarse level's triangles, in `coarse_idx`.
+    pub faces: Vec<[u32; 3]>,
+    /// `fitted` or `barycentric`.
+    pub upsampler: String,
+    /// U (`n_k × n_{k+1}`) as row-major COO triplets: `up_row` in `fine_idx`, `up_col`
+    /// in `coarse_idx`.
+    pub up_row: Vec<u32>,
+    pub up_col: Vec<u32>,
+    pub up_data: Vec<f64>,
+}
+
+impl ArtifactBody for HierarchyLevelV1 {
+    const KIND: ArtifactKind = ArtifactKind::HierarchyLevel;
+}
