@@ -165,7 +165,9 @@ impl LevelSettings<'_> {
             inputs.push(("parent".into(), parent));
         }
         Ok(StageKey {
-            stage: "hierarchy".into(),
+            // One name per level: the cache records the last key per stage name, so
+            // `--explain` compares level k with level k's last run, not with level k−1.
+            stage: format!("hierarchy-{}", step + 1),
             stage_version: desal_hierarchy::VERSION,
             format_version: ArtifactKind::HierarchyLevel.current_version(),
             parameters: canonical_json(&json!({
@@ -526,18 +528,16 @@ mod tests {
         assert!(bary.config().unwrap_err().to_string().contains("fitted upsampler only"));
         let (fit, sal, simp) = (FitParams::default(), SaliencyParams::default(), SimplifyParams::default());
         let h = ContentHash::of(b"poses");
-        let key = |hp: &HierarchyParams| {
-            LevelSettings { fit: &fit, saliency: &sal, simplify: &simp, hierarchy: hp }
-                .key(0, h, h, None)
-                .unwrap()
-                .hash()
+        let full_key = |hp: &HierarchyParams| {
+            let settings = LevelSettings { fit: &fit, saliency: &sal, simplify: &simp, hierarchy: hp };
+            settings.key(0, h, h, None).unwrap()
         };
+        let key = |hp: &HierarchyParams| full_key(hp).hash();
+        // As for every stage, a default given explicitly resolves to the same config (it
+        // is only recorded among the user's parameters).
+        let explicit = HierarchyParams { neighbours: Some(16), ..params(vec![10]) };
+        assert_eq!(full_key(&params(vec![10])).resolved, full_key(&explicit).resolved, "16 is the default");
         let base = key(&params(vec![10]));
-        assert_eq!(
-            base,
-            key(&HierarchyParams { neighbours: Some(16), ..params(vec![10]) }),
-            "16 is the default"
-        );
         assert_ne!(base, key(&HierarchyParams { neighbours: Some(8), ..params(vec![10]) }));
         assert_ne!(base, key(&HierarchyParams { ridge: Some(0.0), ..params(vec![10]) }));
         assert_ne!(

@@ -3,6 +3,7 @@
 mod artifacts;
 mod cache;
 mod eval;
+mod hierarchy;
 mod ingest;
 mod stages;
 mod support;
