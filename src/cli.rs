@@ -311,6 +311,96 @@ pub fn simplify(args: &SimplifyArgs) -> Result<()> {
 
 /// Stage-3 weights from a saliency artifact, a PLY `saliency` property or a text file,
 /// one per vertex of the mesh being simplified.
+/// `desal hierarchy`: the coarse levels of a pose set (`[dataset.hierarchy]`) as one
+/// stage on artifacts, with the pipeline's default stage-1–3 settings (plus
+/// `--balance`); writes the same `hierarchy.npz` bytes as `desal run`.
+#[derive(Debug, clap::Args)]
+pub struct HierarchyArgs {
+    /// Pose-set artifact (`poses.dsa`).
+    #[arg(long)]
+    pub poses: PathBuf,
+    /// Labels artifact (`labels.dsa`).
+    #[arg(long)]
+    pub labels: PathBuf,
+    /// Coarse vertex counts, strictly decreasing, e.g. `2500,625`.
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub levels: Vec<usize>,
+    /// `fitted` (pose-aware, default) or `barycentric` (COMA's).
+    #[arg(long, value_enum, default_value_t = stages::hierarchy::UpsamplerName::default())]
+    pub upsampler: stages::hierarchy::UpsamplerName,
+    /// Fitted only: candidate coarse vertices per fine vertex.
+    #[arg(long)]
+    pub neighbours: Option<usize>,
+    /// Fitted only: relative ridge toward the barycentric row.
+    #[arg(long)]
+    pub ridge: Option<f64>,
+    /// Multiply each level's simplification cost by the edge length (the paper's balance
+    /// term; off by default, as in pipeline files).
+    #[arg(long)]
+    pub balance: bool,
+    /// Where to write `hierarchy.npz`.
+    #[arg(long, short)]
+    pub output: PathBuf,
+    /// Also write the levels' figures (`hierarchy.json`) here.
+    #[arg(long)]
+    pub json: Option<PathBuf>,
+}
+
+pub fn hierarchy(args: &HierarchyArgs) -> Result<()> {
+    use stages::hierarchy::{
+        HELDOUT_FOLDS, HierarchyParams, HierarchyReport, LevelSettings, compute_level, npz_arrays,
+    };
+    let (poses, _) = read::<PoseSetV1>(&args.poses)?;
+    let (labels, _) = read::<LabelsV1>(&args.labels)?;
+    let set = poses.to_pose_set().with_context(|| format!("{}", args.poses.display()))?;
+    let labels = labels.to_labels().with_context(|| format!("{}", args.labels.display()))?;
+    let params = HierarchyParams {
+        levels: args.levels.clone(),
+        upsampler: args.upsampler,
+        neighbours: args.neighbours,
+        ridge: args.ridge,
+        neighbourhood: None,
+    };
+    params.config()?;
+    params.check_levels(Some(set.vertex_count()))?;
+    let simplify = stages::simplify::SimplifyParams { balance: args.balance, ..Default::default() };
+    let (fit, saliency) = (FitParams::default(), SaliencyParams::default());
+    let settings = LevelSettings { fit: &fit, saliency: &saliency, simplify: &simplify, hierarchy: &params };
+    let mut levels = Vec::new();
+    for _ in &params.levels {
+        let parents: Vec<_> = levels.iter().map(|l: &stages::runner::StageOutput<_, _>| &l.body).collect();
+        let level = compute_level(&settings, &set, &labels, &parents, &NoProgress)?;
+        eprintln!("{}", level.note);
+        levels.push(level);
+    }
+    let bodies: Vec<_> = levels.iter().map(|l| &l.body).collect();
+    let arrays = npz_arrays(set.vertex_count(), &set.faces, &bodies)?;
+    let report = HierarchyReport {
+        levels: arrays.levels.clone(),
+        upsampler: args.upsampler_name(),
+        heldout_folds: HELDOUT_FOLDS,
+        steps: levels.iter().map(|l| &l.summary).collect(),
+    };
+    let report = serde_json::to_value(&report)?;
+    let mut files: Vec<(PathBuf, FileWriter)> =
+        vec![(args.output.clone(), Box::new(move |p| Ok(desal_io::npz::write_hierarchy_npz(p, &arrays)?)))];
+    if let Some(json) = &args.json {
+        files.push((json.clone(), Box::new(move |p| Ok(desal_io::write_json(p, &report)?))));
+    }
+    write_all_or_nothing(files)?;
+    eprintln!("wrote {}", args.output.display());
+    Ok(())
+}
+
+impl HierarchyArgs {
+    fn upsampler_name(&self) -> &'static str {
+        match self.upsampler {
+            stages::hierarchy::UpsamplerName::Fitted => "fitted",
+            stages::hierarchy::UpsamplerName::Barycentric => "barycentric",
+        }
+    }
+}
+
 fn read_weights(path: &Path, floor: Option<f64>, vertex_count: usize) -> Result<Vec<f64>> {
     let floor_of = |f: f64| -> Result<f64> {
         anyhow::ensure!((0.0..=1.0).contains(&f), "--floor {f} is outside [0, 1]");

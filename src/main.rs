@@ -63,6 +63,8 @@ enum Command {
     /// Stage 4 alone: map a simplified template (desal's or another tool's) to original
     /// vertices and apply it to every pose.
     Map(desal::cli::MapArgs),
+    /// Coarse levels for mesh networks (D, U, A per level) as `hierarchy.npz`.
+    Hierarchy(desal::cli::HierarchyArgs),
     /// The paper's experiment: simplify with each method, fit the SCAPE deformation model
     /// on the simplified poses, deform to every pose and measure v2f/v2v (eval.md).
     Eval(desal::evaluate::EvalArgs),
@@ -124,6 +126,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Saliency(args) => desal::cli::saliency(&args),
         Command::Simplify(args) => desal::cli::simplify(&args),
         Command::Map(args) => desal::cli::map(&args),
+        Command::Hierarchy(args) => desal::cli::hierarchy(&args),
         Command::Eval(args) => desal::evaluate::eval(&args),
         Command::Cache { action: CacheAction::Gc { pipeline, out, cache_dir } } => {
             let loaded = desal::pipeline::load(&pipeline, out.as_deref())?;

@@ -10,6 +10,7 @@
 //! | `labels.txt`, `parts.png`, `parts.json` | with `labels = "auto"`: the discovered parts (text, drawn on the template, the discovery's figures) |
 //! | `simplified-template-raw.ply` | stage 3's template before mapping |
 //! | `simplified/<pose>.ply`, `simplified/parts.txt`, `vertex_map.txt` | the registered simplified pose set |
+//! | `hierarchy-<k>.dsa`, `hierarchy.npz`, `hierarchy.json` | with `[dataset.hierarchy]`: each level's cache entry, the npz of every level (`stages::hierarchy::npz_arrays`), the levels' summaries |
 //! | `report.json` | the run's report, with `outputs_key` |
 //! | `eval/` | `desal eval`'s, kept across runs |
 
@@ -103,7 +104,33 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
     add_artifact(&mut outputs, "saliency", &stages.saliency.artifact_path, &stages.saliency.summary);
     add_artifact(&mut outputs, "simplified", &stages.simplified.artifact_path, &stages.simplified.summary);
     add_artifact(&mut outputs, "map", &stages.map.artifact_path, &stages.map.summary);
+    if !stages.hierarchy.is_empty() {
+        add_hierarchy(&mut outputs, stages, set)?;
+    }
     Ok(outputs)
+}
+
+/// `hierarchy-<k>.dsa` per level, `hierarchy.npz` and `hierarchy.json`.
+fn add_hierarchy(outputs: &mut DatasetOutputs, stages: &DatasetStages, set: &PoseSet) -> Result<()> {
+    use crate::stages::hierarchy::{HELDOUT_FOLDS, HierarchyReport, npz_arrays};
+    let bodies = stages.hierarchy.iter().map(|l| l.body()).collect::<Result<Vec<_>>>()?;
+    let arrays = npz_arrays(set.vertex_count(), &set.faces, &bodies)?;
+    let report = HierarchyReport {
+        levels: arrays.levels.clone(),
+        upsampler: &bodies[0].upsampler,
+        heldout_folds: HELDOUT_FOLDS,
+        steps: stages.hierarchy.iter().map(|l| &l.summary).collect(),
+    };
+    let report = serde_json::to_value(&report)?;
+    for (k, level) in stages.hierarchy.iter().enumerate() {
+        outputs.artifacts.push((format!("hierarchy-{}.dsa", k + 1), level.artifact_path.clone()));
+    }
+    outputs.files.push((
+        "hierarchy.npz".into(),
+        Box::new(move |p| Ok(desal_io::npz::write_hierarchy_npz(p, &arrays)?)),
+    ));
+    outputs.files.push(("hierarchy.json".into(), Box::new(move |p| Ok(desal_io::write_json(p, &report)?))));
+    Ok(())
 }
 
 /// `saliency.png` (the paper's Fig. 1) and `saliency.ply` (colours + a `saliency`

@@ -11,6 +11,7 @@ use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 
 use crate::stages::fit::FitParams;
+use crate::stages::hierarchy::HierarchyParams;
 use crate::stages::ingest::{IngestParams, TemplateSpec, pose_name};
 use crate::stages::parts::PartsParams;
 use crate::stages::saliency::SaliencyParams;
@@ -60,6 +61,9 @@ pub struct DatasetToml {
     pub saliency: SaliencyParams,
     #[serde(default)]
     pub simplify: SimplifyParams,
+    /// `[dataset.hierarchy]`: coarse levels for mesh networks (absent: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hierarchy: Option<HierarchyParams>,
 }
 
 /// `labels = "auto"` or a labels file path (a file literally named `auto` is `./auto`).
@@ -126,6 +130,7 @@ impl Dataset {
             fit: &self.spec.fit,
             saliency: &self.spec.saliency,
             simplify: &self.spec.simplify,
+            hierarchy: self.spec.hierarchy.as_ref(),
         }
     }
 }
@@ -213,6 +218,9 @@ fn check_parameters(spec: &DatasetToml, pose_files: &[PathBuf]) -> Result<()> {
             bail!("`parts` applies to `labels = \"auto\"` only; this dataset reads its labels from a file")
         }
         LabelsSpec::File(_) => {}
+    }
+    if let Some(h) = &spec.hierarchy {
+        h.config()?;
     }
     crate::pictures::parse_up_axis(spec.up_axis.as_deref())?;
     Ok(())

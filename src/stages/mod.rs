@@ -7,6 +7,7 @@
 //! `run` ← {`cli`, `evaluate`}; no module imports a later one.
 
 pub mod fit;
+pub mod hierarchy;
 pub mod ingest;
 pub mod map;
 pub mod parts;
@@ -18,10 +19,13 @@ use std::cell::OnceCell;
 use std::path::Path;
 
 use anyhow::Result;
-use desal_io::artifact::{ArtifactKind, FitV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1};
+use desal_io::artifact::{
+    ArtifactKind, FitV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1,
+};
 use desal_mesh::{PartLabels, PoseSet, Progress};
 
 use fit::{FitParams, FitSummary};
+use hierarchy::{HierarchyParams, LevelSummary};
 use ingest::{IngestParams, IngestSummary, LabelsSummary};
 use map::MapSummary;
 use parts::{PartsParams, PartsSummary};
@@ -37,6 +41,8 @@ pub struct DatasetInputs<'a> {
     pub fit: &'a FitParams,
     pub saliency: &'a SaliencyParams,
     pub simplify: &'a SimplifyParams,
+    /// `[dataset.hierarchy]`, when the dataset asks for one.
+    pub hierarchy: Option<&'a HierarchyParams>,
 }
 
 /// Where a dataset's part labels come from: a labels file, or discovery from the poses.
@@ -58,6 +64,8 @@ pub struct DatasetStages {
     pub saliency: Staged<SaliencyV1, SaliencySummary>,
     pub simplified: Staged<SimplifiedV1, SimplifySummary>,
     pub map: Staged<MapV1, MapSummary>,
+    /// One per coarse level, level 1 first (empty without `[dataset.hierarchy]`).
+    pub hierarchy: Vec<Staged<HierarchyLevelV1, LevelSummary>>,
     pose_set: OnceCell<PoseSet>,
     part_labels: OnceCell<PartLabels>,
 }
@@ -153,7 +161,28 @@ pub fn run_stages(
     let mapped =
         runner.stage(Stage::Map, key, &[], || map::compute(simplified.body()?, set()?, part_labels()?))?;
 
+    // Hierarchy: one stage per coarse level, each from the level above.
+    let mut levels: Vec<Staged<HierarchyLevelV1, LevelSummary>> = Vec::new();
+    if let Some(h) = inputs.hierarchy {
+        h.check_levels(Some(poses.summary.vertices))?;
+        let settings = hierarchy::LevelSettings {
+            fit: inputs.fit,
+            saliency: inputs.saliency,
+            simplify: inputs.simplify,
+            hierarchy: h,
+        };
+        for step in 0..h.levels.len() {
+            let key = settings.key(step, poses.hash, labels.hash, levels.last().map(|l| l.hash))?;
+            let level = runner.stage(Stage::Hierarchy, key, &[], || {
+                let parents = levels.iter().map(|l| l.body()).collect::<Result<Vec<_>>>()?;
+                hierarchy::compute_level(&settings, set()?, part_labels()?, &parents, progress)
+            })?;
+            levels.push(level);
+        }
+    }
+
     Ok(DatasetStages {
+        hierarchy: levels,
         poses,
         labels,
         parts: parts_summary,
@@ -184,6 +213,7 @@ pub fn describe_stage_artifact(path: &std::path::Path, kind: ArtifactKind, out: 
         ArtifactKind::Saliency => saliency::describe(&read_artifact::<SaliencyV1>(path)?.1, out),
         ArtifactKind::Simplified => simplify::describe(&read_artifact::<SimplifiedV1>(path)?.1, out),
         ArtifactKind::Map => map::describe(&read_artifact::<MapV1>(path)?.1, out),
+        ArtifactKind::HierarchyLevel => hierarchy::describe(&read_artifact::<HierarchyLevelV1>(path)?.1, out),
         _ => writeln!(out, "    ({kind} artifacts are summarised once their stage is wired in)")?,
     }
     Ok(())

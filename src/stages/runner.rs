@@ -26,6 +26,7 @@ pub enum Stage {
     Saliency,
     Simplify,
     Map,
+    Hierarchy,
 }
 
 /// What a stage computes: its artifact body, a typed summary (the JSON sidecar) and a

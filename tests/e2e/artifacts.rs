@@ -3,7 +3,9 @@
 
 use std::path::Path;
 
-use desal_io::artifact::{self, FitV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1};
+use desal_io::artifact::{
+    self, FitV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1,
+};
 
 use crate::support::desal;
 
@@ -29,6 +31,25 @@ fn frozen_v1_fixtures_still_load() {
     assert_eq!(simplified, fixture_simplified());
     let (_, map, _) = artifact::read_artifact::<MapV1>(&fixture("map-v1.dsa")).unwrap();
     assert_eq!(map, fixture_map());
+    let (producer, level, _) =
+        artifact::read_artifact::<HierarchyLevelV1>(&fixture("hierarchy-level-v1.dsa")).unwrap();
+    assert_eq!(producer.stage, "hierarchy-1");
+    assert_eq!(level, fixture_hierarchy_level());
+}
+
+/// A level of the fixture pose set: vertices 0, 1, 2 kept (one triangle); vertex 3 is
+/// upsampled as 1/4, 1/2, 1/4 of them.
+fn fixture_hierarchy_level() -> HierarchyLevelV1 {
+    HierarchyLevelV1 {
+        fine_vertices: 4,
+        coarse_to_fine: vec![0, 1, 2],
+        coarse_to_orig: vec![0, 1, 2],
+        faces: vec![[0, 1, 2]],
+        upsampler: "barycentric".into(),
+        up_row: vec![0, 1, 2, 3, 3, 3],
+        up_col: vec![0, 1, 2, 0, 1, 2],
+        up_data: vec![1.0, 1.0, 1.0, 0.25, 0.5, 0.25],
+    }
 }
 
 /// Stage 1 on the fixture pose set: pose 1 is pose 0 moved by +0.5 along x.
@@ -129,6 +150,9 @@ fn write_fixtures() {
     artifact::write_artifact(&fixture("simplified-v1.dsa"), &producer, &fixture_simplified()).unwrap();
     let producer = artifact::Producer { stage: "map".into(), ..producer };
     artifact::write_artifact(&fixture("map-v1.dsa"), &producer, &fixture_map()).unwrap();
+    let producer = artifact::Producer { stage: "hierarchy-1".into(), ..producer };
+    let level = fixture_hierarchy_level();
+    artifact::write_artifact(&fixture("hierarchy-level-v1.dsa"), &producer, &level).unwrap();
 }
 
 #[test]
@@ -140,7 +164,7 @@ fn inspect_describes_an_artifact_and_refuses_a_foreign_file() {
         text.contains("pose-set (format version 1)") && text.contains("poses 2, vertices 4, faces 4"),
         "{text}"
     );
-    for kind in ["labels", "fit", "saliency", "simplified", "map"] {
+    for kind in ["labels", "fit", "saliency", "simplified", "map", "hierarchy-level"] {
         let out = desal(&["inspect", fixture(&format!("{kind}-v1.dsa")).to_str().unwrap()]);
         let text = String::from_utf8_lossy(&out.stdout);
         assert!(

@@ -4,6 +4,7 @@ mod artifacts;
 mod cache;
 mod eval;
 mod faults;
+mod hierarchy;
 mod ingest;
 mod parts;
 mod stages;

@@ -22,7 +22,8 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
 use desal_io::artifact::{
-    self, ArtifactBody, ArtifactKind, FitV1, HEADER_LEN, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1,
+    self, ArtifactBody, ArtifactKind, FitV1, HEADER_LEN, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV1,
+    SaliencyV1, SimplifiedV1,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -229,6 +230,15 @@ fn execute_artifact(path: &Path, bytes: &[u8]) -> bool {
         ArtifactKind::Map => decoded::<MapV1>(path, bytes, |b| {
             for f in &b.faces {
                 let _ = f.map(|v| b.simp_to_orig[v as usize]);
+            }
+        }),
+        ArtifactKind::HierarchyLevel => decoded::<HierarchyLevelV1>(path, bytes, |b| {
+            // What the npz writer indexes: the maps by coarse vertex, U by its triplets.
+            for f in &b.faces {
+                let _ = f.map(|c| (b.coarse_to_fine[c as usize], b.coarse_to_orig[c as usize]));
+            }
+            for k in 0..b.up_row.len() {
+                let _ = (b.up_col[k], b.up_data[k], b.coarse_to_fine[b.up_col[k] as usize]);
             }
         }),
     }

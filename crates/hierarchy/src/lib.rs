@@ -64,6 +64,11 @@ pub mod level;
 pub mod measure;
 pub mod sparse;
 
+/// Version of the rules that make a level's matrices (selection, upsamplers, adjacency).
+/// Bump it in the same commit as any change to what `build_level` returns: the driver's
+/// cache keys the hierarchy stage on it.
+pub const VERSION: u32 = 1;
+
 pub use error::HierarchyError;
 pub use fitted::{DEFAULT_NEIGHBOURS, DEFAULT_RIDGE, FitCounts, FittedConfig, Neighbourhood};
 pub use level::{Level, LevelInput, LevelReport, Upsampler, adjacency, build_level, nest, selection};

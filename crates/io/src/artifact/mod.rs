@@ -50,16 +50,19 @@ pub enum ArtifactKind {
     Simplified = 5,
     /// The simplified-to-original vertex map (stage 4).
     Map = 6,
+    /// One level of a hierarchy: selection, upsampler, coarse faces (stage `hierarchy`).
+    HierarchyLevel = 7,
 }
 
 impl ArtifactKind {
-    pub const ALL: [ArtifactKind; 6] = [
+    pub const ALL: [ArtifactKind; 7] = [
         ArtifactKind::PoseSet,
         ArtifactKind::Labels,
         ArtifactKind::Fit,
         ArtifactKind::Saliency,
         ArtifactKind::Simplified,
         ArtifactKind::Map,
+        ArtifactKind::HierarchyLevel,
     ];
 
     pub fn name(self) -> &'static str {
@@ -70,6 +73,7 @@ impl ArtifactKind {
             ArtifactKind::Saliency => "saliency",
             ArtifactKind::Simplified => "simplified",
             ArtifactKind::Map => "map",
+            ArtifactKind::HierarchyLevel => "hierarchy-level",
         }
     }
 

@@ -269,3 +269,55 @@ fn product(a: usize, b: usize) -> Result<usize, String> {
 fn check_faces(faces: &[[u32; 3]], vertices: usize) -> Result<(), String> {
     desal_mesh::validate::check_face_indices(faces, vertices).map_err(|e| e.to_string())
 }
+
+/// One level step k → k+1 of a hierarchy (stage `hierarchy`, one artifact per level).
+/// Index spaces: `fine_idx` is level k's vertex index, `coarse_idx` level k+1's,
+/// `orig_idx` level 0's. D and A are not stored: they follow from `coarse_to_fine` and
+/// `faces` (`desal_hierarchy::{selection, adjacency}`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HierarchyLevelV1 {
+    /// `fine_vertices = n_k`.
+    pub fine_vertices: u32,
+    /// `coarse_to_fine[coarse_idx] = fine_idx` (`map{k+1}`), distinct.
+    pub coarse_to_fine: Vec<u32>,
+    /// `coarse_to_orig[coarse_idx] = orig_idx` (`orig{k+1}`).
+    pub coarse_to_orig: Vec<u32>,
+    /// The coarse level's triangles, in `coarse_idx`.
+    pub faces: Vec<[u32; 3]>,
+    /// `fitted` or `barycentric`.
+    pub upsampler: String,
+    /// U (`n_k × n_{k+1}`) as row-major COO triplets: `up_row` in `fine_idx`, `up_col`
+    /// in `coarse_idx`.
+    pub up_row: Vec<u32>,
+    pub up_col: Vec<u32>,
+    pub up_data: Vec<f64>,
+}
+
+impl ArtifactBody for HierarchyLevelV1 {
+    const KIND: ArtifactKind = ArtifactKind::HierarchyLevel;
+
+    /// Index ranges, one-to-one maps, matching triplet lengths, finite weights.
+    fn validate(&self) -> Result<(), String> {
+        let (fine, coarse) = (self.fine_vertices as usize, self.coarse_to_fine.len());
+        expect_len("coarse_to_orig", self.coarse_to_orig.len(), "coarse vertices", coarse)?;
+        let mut sorted = self.coarse_to_fine.clone();
+        sorted.sort_unstable();
+        if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+            return Err(format!("fine vertex {} is kept twice (the map must be one to one)", w[0]));
+        }
+        for (c, &f) in self.coarse_to_fine.iter().enumerate() {
+            check_index(&format!("coarse vertex {c}"), "fine vertex", f, fine)?;
+        }
+        check_faces(&self.faces, coarse)?;
+        expect_len("up_col", self.up_col.len(), "up_row entries", self.up_row.len())?;
+        expect_len("up_data", self.up_data.len(), "up_row entries", self.up_row.len())?;
+        for (k, (&r, &c)) in self.up_row.iter().zip(&self.up_col).enumerate() {
+            check_index(&format!("U entry {k}"), "fine row", r, fine)?;
+            check_index(&format!("U entry {k}"), "coarse column", c, coarse)?;
+        }
+        match self.up_data.iter().position(|w| !w.is_finite()) {
+            Some(k) => Err(format!("U entry {k} is not finite")),
+            None => Ok(()),
+        }
+    }
+}

@@ -1,0 +1,552 @@
+//! The hierarchy stage (`[dataset.hierarchy]`, `desal hierarchy`): one cached stage per
+//! level step k → k+1, each simplified from the registered pose set of the level above
+//! with the dataset's stage-1–4 settings (subset placement, so every coarse vertex is a
+//! vertex of the level above and the maps nest), then D, U and A from `desal-hierarchy`.
+//!
+//! Saliency is recomputed on each level's own pose set (`desal-hierarchy`'s crate docs:
+//! measured on SCAPE slightly better with the fitted U than carrying level 0's down).
+//! `[saliency] exclude` poses stay out of the fitted upsampler's training mask.
+//!
+//! Each level's summary also holds the held-out upsampling error (m²) of the fitted and
+//! the barycentric U, composed to full resolution: [`HELDOUT_FOLDS`] folds by pose index,
+//! U of every level up to this one refitted on each fold's training poses only.
+//!
+//! Index spaces: `fine_idx` (level k), `coarse_idx` (level k+1), `orig_idx` (level 0).
+
+use anyhow::{Result, bail};
+use desal_hierarchy::{
+    CsrMatrix, FittedConfig, LevelInput, Neighbourhood, Upsampler, adjacency, build_level, nest, selection,
+    upsampling_error,
+};
+use desal_io::artifact::{ArtifactKind, ContentHash, HierarchyLevelV1};
+use desal_io::npz::{CooArrays, HierarchyArrays};
+use desal_mesh::{PartLabels, PoseSet, Progress};
+use desal_simplify::Placement;
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+
+use crate::cache::{StageKey, canonical_json};
+use crate::stages::fit::FitParams;
+use crate::stages::runner::StageOutput;
+use crate::stages::saliency::SaliencyParams;
+use crate::stages::simplify::SimplifyParams;
+
+/// Folds of the held-out upsampling error: fold `f` measures the poses with
+/// `index % HELDOUT_FOLDS == f` and fits on the others (even/odd, as the crate measured).
+pub const HELDOUT_FOLDS: usize = 2;
+
+/// `upsampler` in `[dataset.hierarchy]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum UpsamplerName {
+    /// Pose-aware least squares over the training poses (the default).
+    #[default]
+    Fitted,
+    /// COMA's rule: barycentric coordinates in the template pose.
+    Barycentric,
+}
+
+/// `neighbourhood` in `[dataset.hierarchy]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum NeighbourhoodName {
+    Euclidean,
+    Geodesic,
+}
+
+/// `[dataset.hierarchy]`: the coarse levels and their upsampler.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct HierarchyParams {
+    /// Coarse vertex counts, strictly decreasing, each >= 4 (level 0 is the input).
+    pub levels: Vec<usize>,
+    #[serde(default)]
+    pub upsampler: UpsamplerName,
+    /// Fitted only: candidate coarse vertices per fine vertex (default 16).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub neighbours: Option<usize>,
+    /// Fitted only: relative ridge toward the barycentric row (default 3e-3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ridge: Option<f64>,
+    /// Fitted only: `euclidean` (default) or `geodesic` candidates.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub neighbourhood: Option<NeighbourhoodName>,
+}
+
+impl HierarchyParams {
+    /// The levels, checked: non-empty, strictly decreasing, each >= 4, and below
+    /// `vertex_count` when it is known.
+    pub fn check_levels(&self, vertex_count: Option<usize>) -> Result<()> {
+        if self.levels.is_empty() {
+            bail!("hierarchy: levels is empty: give at least one coarse vertex count");
+        }
+        if let Some(&n) = self.levels.iter().find(|&&n| n < 4) {
+            bail!("hierarchy: level of {n} vertices is too small: the simplest closed surface has 4");
+        }
+        if let Some(w) = self.levels.windows(2).find(|w| w[1] >= w[0]) {
+            bail!("hierarchy: levels must be strictly decreasing, but {} is followed by {}", w[0], w[1]);
+        }
+        if let Some(n) = vertex_count
+            && self.levels[0] >= n
+        {
+            bail!("hierarchy: the first level ({}) must be below the input's {n} vertices", self.levels[0]);
+        }
+        Ok(())
+    }
+
+    /// The upsampler these parameters resolve to, validated (the fitted-only keys are
+    /// refused with `barycentric`).
+    pub fn config(&self) -> Result<Upsampler> {
+        self.check_levels(None)?;
+        let up = match self.upsampler {
+            UpsamplerName::Barycentric => {
+                if self.neighbours.is_some() || self.ridge.is_some() || self.neighbourhood.is_some() {
+                    bail!(
+                        "hierarchy: neighbours, ridge and neighbourhood apply to the fitted upsampler only"
+                    );
+                }
+                Upsampler::Barycentric
+            }
+            UpsamplerName::Fitted => {
+                let d = FittedConfig::default();
+                Upsampler::Fitted(FittedConfig {
+                    neighbours: self.neighbours.unwrap_or(d.neighbours),
+                    ridge: self.ridge.unwrap_or(d.ridge),
+                    neighbourhood: match self.neighbourhood {
+                        None => d.neighbourhood,
+                        Some(NeighbourhoodName::Euclidean) => Neighbourhood::Euclidean,
+                        Some(NeighbourhoodName::Geodesic) => Neighbourhood::Geodesic,
+                    },
+                })
+            }
+        };
+        up.validate().map_err(|e| anyhow::anyhow!("hierarchy: {e}"))?;
+        Ok(up)
+    }
+}
+
+/// The dataset's settings a level is simplified with.
+#[derive(Debug, Clone, Copy)]
+pub struct LevelSettings<'a> {
+    pub fit: &'a FitParams,
+    pub saliency: &'a SaliencyParams,
+    pub simplify: &'a SimplifyParams,
+    pub hierarchy: &'a HierarchyParams,
+}
+
+impl LevelSettings<'_> {
+    /// Stage 3's parameters for level `step + 1`: the dataset's, with this level's target
+    /// and subset placement.
+    fn simplify_params(&self, step: usize) -> SimplifyParams {
+        SimplifyParams {
+            target_vertices: Some(self.hierarchy.levels[step]),
+            target_faces: None,
+            ratio: None,
+            placement: Placement::Subset,
+            ..self.simplify.clone()
+        }
+    }
+
+    /// The cache key of level step `step` (→ level `step + 1`): the pose set and labels,
+    /// the parent level's artifact (for `step > 0`), this level's target, the resolved
+    /// stage-1/2/3 settings it is simplified with, and the resolved upsampler.
+    pub fn key(
+        &self,
+        step: usize,
+        poses: ContentHash,
+        labels: ContentHash,
+        parent: Option<ContentHash>,
+    ) -> Result<StageKey> {
+        let simplify = self.simplify_params(step).key(poses, poses, labels)?;
+        let fit = self.fit.key(poses, labels);
+        let saliency = self.saliency.key(poses, poses)?;
+        let mut inputs = vec![("poses".to_owned(), poses), ("labels".to_owned(), labels)];
+        if let Some(parent) = parent {
+            inputs.push(("parent".into(), parent));
+        }
+        Ok(StageKey {
+            // One name per level: the cache records the last key per stage name, so
+            // `--explain` compares level k with level k's last run, not with level k−1.
+            stage: format!("hierarchy-{}", step + 1),
+            stage_version: desal_hierarchy::VERSION,
+            format_version: ArtifactKind::HierarchyLevel.current_version(),
+            parameters: canonical_json(&json!({
+                "level": step + 1,
+                "vertices": self.hierarchy.levels[step],
+                "upsampler": self.hierarchy.upsampler,
+                "neighbours": self.hierarchy.neighbours,
+                "ridge": self.hierarchy.ridge,
+                "neighbourhood": self.hierarchy.neighbourhood,
+            })),
+            resolved: canonical_json(&json!({
+                "level": step + 1,
+                "upsampler": upsampler_json(&self.hierarchy.config()?),
+                "heldout_folds": HELDOUT_FOLDS,
+                "fit": fit.resolved,
+                "saliency": saliency.resolved,
+                "simplify": simplify.resolved,
+            })),
+            inputs,
+        })
+    }
+}
+
+/// Every field of the upsampler configuration, destructured exhaustively.
+fn upsampler_json(up: &Upsampler) -> serde_json::Value {
+    match up {
+        Upsampler::Barycentric => json!("barycentric"),
+        Upsampler::Fitted(FittedConfig { neighbours, neighbourhood, ridge }) => json!({
+            "fitted": {
+                "neighbours": neighbours,
+                "ridge": ridge,
+                "neighbourhood": match neighbourhood {
+                    Neighbourhood::Euclidean => "euclidean",
+                    Neighbourhood::Geodesic => "geodesic",
+                },
+            }
+        }),
+    }
+}
+
+/// Held-out upsampling error of one upsampler, composed to full resolution, m².
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct HeldOutError {
+    /// Means over every measured pose.
+    pub mse: f64,
+    pub v2f: f64,
+    pub folds: Vec<FoldError>,
+}
+
+/// One fold of [`HeldOutError`].
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FoldError {
+    pub fold: usize,
+    pub training_poses: usize,
+    pub measured_poses: usize,
+    pub mse: f64,
+    pub v2f: f64,
+}
+
+/// `hierarchy.json`'s entry for one level step k → k+1 (the stage's summary).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct LevelSummary {
+    /// k + 1.
+    pub level: usize,
+    pub fine_vertices: usize,
+    pub vertices: usize,
+    pub faces: usize,
+    pub upsampler: String,
+    /// Poses U was fitted on (0 for barycentric).
+    pub training_poses: usize,
+    pub up_nnz: usize,
+    pub down_nnz: usize,
+    pub adjacency_nnz: usize,
+    pub up_mean_row_nnz: f64,
+    /// Largest `|row sum − 1|` of U.
+    pub up_max_row_sum_error: f64,
+    /// Wall time of simplify + map + saliency + U of this level, seconds (held-out
+    /// measurement excluded).
+    pub seconds: f64,
+    /// Of which building D, U and A.
+    pub matrices_seconds: f64,
+    /// Held out, composed to full resolution: the fitted U (the dataset's fitted
+    /// configuration, or the default one when the dataset uses barycentric) and COMA's.
+    pub heldout_fitted: HeldOutError,
+    pub heldout_barycentric: HeldOutError,
+    /// `heldout_fitted.mse / heldout_barycentric.mse`.
+    pub heldout_mse_ratio: f64,
+}
+
+/// Level `parents.len()`'s registered pose set and labels, gathered from level 0 at its
+/// `coarse_to_orig` (level 0 itself when `parents` is empty).
+fn level_pose_set(
+    full: &PoseSet,
+    labels: &PartLabels,
+    parent: Option<&HierarchyLevelV1>,
+) -> Result<(PoseSet, PartLabels)> {
+    let Some(p) = parent else { return Ok((full.clone(), labels.clone())) };
+    let gather = |v: &[desal_mesh::Vec3]| p.coarse_to_orig.iter().map(|&o| v[o as usize]).collect();
+    let set = PoseSet::try_new(
+        full.names.clone(),
+        full.poses.iter().map(|v| gather(v)).collect(),
+        p.faces.clone(),
+        full.template,
+    )?;
+    let labels = PartLabels {
+        labels: p.coarse_to_orig.iter().map(|&o| labels.labels[o as usize]).collect(),
+        names: labels.names.clone(),
+    };
+    Ok((set, labels))
+}
+
+/// The training mask of the output U: every pose but `[saliency] exclude`'s.
+fn training_mask(set: &PoseSet, saliency: &SaliencyParams) -> Vec<bool> {
+    set.names.iter().map(|n| !saliency.exclude.contains(n)).collect()
+}
+
+fn upsampler_matrix(level: &HierarchyLevelV1) -> Result<CsrMatrix> {
+    let mut rows: Vec<Vec<(u32, f64)>> = vec![Vec::new(); level.fine_vertices as usize];
+    for ((&r, &c), &v) in level.up_row.iter().zip(&level.up_col).zip(&level.up_data) {
+        rows[r as usize].push((c, v));
+    }
+    Ok(CsrMatrix::from_rows(level.coarse_to_fine.len(), rows)?)
+}
+
+/// Computes level step `parents.len()` (→ level `parents.len() + 1`); `parents` are the
+/// artifacts of levels 1..=k, in order.
+pub fn compute_level(
+    settings: &LevelSettings,
+    full: &PoseSet,
+    labels: &PartLabels,
+    parents: &[&HierarchyLevelV1],
+    progress: &dyn Progress,
+) -> Result<StageOutput<HierarchyLevelV1, LevelSummary>> {
+    let start = std::time::Instant::now();
+    let step = parents.len();
+    settings.hierarchy.check_levels(Some(full.vertex_count()))?;
+    let upsampler = settings.hierarchy.config()?;
+    let parent = parents.last().copied();
+    let (fine, fine_labels) = level_pose_set(full, labels, parent)?;
+
+    // Stages 1–4 on this level's pose set, through the one stage-3/4 path.
+    let config = settings.simplify_params(step).config()?;
+    let weights = if config.saliency {
+        let fit = super::fit::compute(settings.fit, &fine, &fine_labels, progress)?.body;
+        super::saliency::compute(settings.saliency, &fit, fine.template_mesh().diagonal())?.body.weights
+    } else {
+        Vec::new()
+    };
+    let simplified =
+        super::simplify::compute(&config, &fine.template_mesh(), &weights, &fine_labels, progress)?.body;
+    let mapped = super::map::map(&simplified, &fine, &fine_labels)?;
+    let coarse_to_fine = mapped.map.simp_to_orig;
+    let faces = simplified.faces;
+
+    let mask = training_mask(&fine, settings.saliency);
+    let input =
+        LevelInput { fine: &fine, coarse_to_fine: &coarse_to_fine, coarse_faces: &faces, training: &mask };
+    let level = build_level(&input, &upsampler)?;
+    let fine_to_orig: Vec<u32> = match parent {
+        Some(p) => p.coarse_to_orig.clone(),
+        None => (0..full.vertex_count() as u32).collect(),
+    };
+    let coo = level.up.to_coo();
+    let body = HierarchyLevelV1 {
+        fine_vertices: fine.vertex_count() as u32,
+        coarse_to_orig: nest(&fine_to_orig, &coarse_to_fine),
+        coarse_to_fine,
+        faces,
+        upsampler: upsampler.name().into(),
+        up_row: coo.row,
+        up_col: coo.col,
+        up_data: coo.data,
+    };
+    let seconds = start.elapsed().as_secs_f64();
+
+    let mut chain: Vec<&HierarchyLevelV1> = parents.to_vec();
+    chain.push(&body);
+    let fitted = match upsampler {
+        Upsampler::Fitted(c) => Upsampler::Fitted(c),
+        Upsampler::Barycentric => Upsampler::default(),
+    };
+    let heldout_fitted = heldout(full, labels, &chain, &fitted, settings.saliency)?;
+    let heldout_barycentric = heldout(full, labels, &chain, &Upsampler::Barycentric, settings.saliency)?;
+    let r = &level.report;
+    let summary = LevelSummary {
+        level: step + 1,
+        fine_vertices: r.fine_vertices,
+        vertices: r.coarse_vertices,
+        faces: r.coarse_faces,
+        upsampler: r.upsampler.into(),
+        training_poses: r.training_poses,
+        up_nnz: r.up_nnz,
+        down_nnz: level.down.nnz(),
+        adjacency_nnz: level.coarse_adjacency.nnz(),
+        up_mean_row_nnz: r.up_mean_row_nnz,
+        up_max_row_sum_error: r.up_max_row_sum_error,
+        seconds,
+        matrices_seconds: r.seconds,
+        heldout_mse_ratio: heldout_fitted.mse / heldout_barycentric.mse,
+        heldout_fitted,
+        heldout_barycentric,
+    };
+    let note = format!(
+        "level {}: {} -> {} vertices, {} U ({} nnz), held-out MSE fitted {:.3e} / barycentric {:.3e} m² = {:.3}, {:.2} s",
+        summary.level,
+        summary.fine_vertices,
+        summary.vertices,
+        summary.upsampler,
+        summary.up_nnz,
+        summary.heldout_fitted.mse,
+        summary.heldout_barycentric.mse,
+        summary.heldout_mse_ratio,
+        seconds
+    );
+    Ok(StageOutput { body, summary, note })
+}
+
+/// The held-out upsampling error of the last level of `chain` with `upsampler`, composed
+/// to full resolution: per fold, every level's U refitted on that fold's training poses.
+fn heldout(
+    full: &PoseSet,
+    labels: &PartLabels,
+    chain: &[&HierarchyLevelV1],
+    upsampler: &Upsampler,
+    saliency: &SaliencyParams,
+) -> Result<HeldOutError> {
+    let all = training_mask(full, saliency);
+    let mut folds = Vec::new();
+    let (mut mse_sum, mut v2f_sum, mut measured_total) = (0.0, 0.0, 0usize);
+    for fold in 0..HELDOUT_FOLDS {
+        let mask: Vec<bool> = (0..full.pose_count()).map(|p| all[p] && p % HELDOUT_FOLDS != fold).collect();
+        let measured: Vec<usize> = (0..full.pose_count()).filter(|p| p % HELDOUT_FOLDS == fold).collect();
+        if measured.is_empty() {
+            continue;
+        }
+        let mut composed: Option<CsrMatrix> = None;
+        for (k, level) in chain.iter().enumerate() {
+            let parent = k.checked_sub(1).map(|j| chain[j]);
+            let (fine, _) = level_pose_set(full, labels, parent)?;
+            let input = LevelInput {
+                fine: &fine,
+                coarse_to_fine: &level.coarse_to_fine,
+                coarse_faces: &level.faces,
+                training: &mask,
+            };
+            let up = build_level(&input, upsampler)?.up;
+            composed = Some(match composed {
+                None => up,
+                Some(c) => c.mul(&up)?,
+            });
+        }
+        let composed = composed.expect("a chain has at least one level");
+        let last = chain.last().expect("non-empty chain");
+        let e = upsampling_error(full, &composed, &last.coarse_to_orig, &measured)?;
+        mse_sum += e.mse * measured.len() as f64;
+        v2f_sum += e.v2f * measured.len() as f64;
+        measured_total += measured.len();
+        folds.push(FoldError {
+            fold,
+            training_poses: mask.iter().filter(|&&m| m).count(),
+            measured_poses: measured.len(),
+            mse: e.mse,
+            v2f: e.v2f,
+        });
+    }
+    let n = measured_total.max(1) as f64;
+    Ok(HeldOutError { mse: mse_sum / n, v2f: v2f_sum / n, folds })
+}
+
+/// `hierarchy.json`: the level counts and every level step's summary.
+#[derive(Debug, Clone, Serialize)]
+pub struct HierarchyReport<'a> {
+    /// Vertex count of each level, level 0 first.
+    pub levels: Vec<usize>,
+    pub upsampler: &'a str,
+    pub heldout_folds: usize,
+    pub steps: Vec<&'a LevelSummary>,
+}
+
+/// The npz arrays of a hierarchy: level 0 (`full`'s vertex count and faces) and the level
+/// artifacts in order.
+pub fn npz_arrays(
+    full_vertices: usize,
+    full_faces: &[[u32; 3]],
+    levels: &[&HierarchyLevelV1],
+) -> Result<HierarchyArrays> {
+    let coo = |m: &CsrMatrix| {
+        let c = m.to_coo();
+        CooArrays { shape: [c.rows, c.cols], row: c.row, col: c.col, data: c.data }
+    };
+    let mut h = HierarchyArrays {
+        levels: vec![full_vertices],
+        faces: vec![full_faces.to_vec()],
+        adjacency: vec![coo(&adjacency(full_vertices, full_faces)?)],
+        down: Vec::new(),
+        up: Vec::new(),
+        map: Vec::new(),
+        orig: Vec::new(),
+    };
+    for level in levels {
+        let n = level.coarse_to_fine.len();
+        h.levels.push(n);
+        h.faces.push(level.faces.clone());
+        h.adjacency.push(coo(&adjacency(n, &level.faces)?));
+        h.down.push(coo(&selection(&level.coarse_to_fine, level.fine_vertices as usize)?));
+        h.up.push(coo(&upsampler_matrix(level)?));
+        h.map.push(level.coarse_to_fine.clone());
+        h.orig.push(level.coarse_to_orig.clone());
+    }
+    Ok(h)
+}
+
+/// `desal inspect` lines for a hierarchy-level artifact.
+pub fn describe(l: &HierarchyLevelV1, out: &mut String) {
+    use std::fmt::Write as _;
+    let _ = writeln!(
+        out,
+        "    {} -> {} vertices, {} faces; {} U with {} entries",
+        l.fine_vertices,
+        l.coarse_to_fine.len(),
+        l.faces.len(),
+        l.upsampler,
+        l.up_data.len()
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params(levels: Vec<usize>) -> HierarchyParams {
+        HierarchyParams {
+            levels,
+            upsampler: UpsamplerName::Fitted,
+            neighbours: None,
+            ridge: None,
+            neighbourhood: None,
+        }
+    }
+
+    /// Levels must be strictly decreasing, >= 4 and below the input: each rule refuses.
+    #[test]
+    fn levels_are_checked() {
+        assert!(params(vec![2500, 625]).check_levels(Some(12500)).is_ok());
+        let err = |p: HierarchyParams, n| p.check_levels(n).unwrap_err().to_string();
+        assert!(err(params(vec![]), None).contains("empty"));
+        assert!(err(params(vec![625, 625]), None).contains("strictly decreasing"));
+        assert!(err(params(vec![100, 3]), None).contains("too small"));
+        assert!(err(params(vec![12500]), Some(12500)).contains("below the input"));
+    }
+
+    /// The fitted-only keys are refused with the barycentric upsampler, and every resolved
+    /// upsampler option changes the key.
+    #[test]
+    fn upsampler_options_are_checked_and_enter_the_key() {
+        let bary =
+            HierarchyParams { upsampler: UpsamplerName::Barycentric, ridge: Some(0.1), ..params(vec![10]) };
+        assert!(bary.config().unwrap_err().to_string().contains("fitted upsampler only"));
+        let (fit, sal, simp) = (FitParams::default(), SaliencyParams::default(), SimplifyParams::default());
+        let h = ContentHash::of(b"poses");
+        let full_key = |hp: &HierarchyParams| {
+            let settings = LevelSettings { fit: &fit, saliency: &sal, simplify: &simp, hierarchy: hp };
+            settings.key(0, h, h, None).unwrap()
+        };
+        let key = |hp: &HierarchyParams| full_key(hp).hash();
+        // As for every stage, a default given explicitly resolves to the same config (it
+        // is only recorded among the user's parameters).
+        let explicit = HierarchyParams { neighbours: Some(16), ..params(vec![10]) };
+        assert_eq!(full_key(&params(vec![10])).resolved, full_key(&explicit).resolved, "16 is the default");
+        let base = key(&params(vec![10]));
+        assert_ne!(base, key(&HierarchyParams { neighbours: Some(8), ..params(vec![10]) }));
+        assert_ne!(base, key(&HierarchyParams { ridge: Some(0.0), ..params(vec![10]) }));
+        assert_ne!(
+            base,
+            key(&HierarchyParams { neighbourhood: Some(NeighbourhoodName::Geodesic), ..params(vec![10]) })
+        );
+        assert_ne!(base, key(&HierarchyParams { upsampler: UpsamplerName::Barycentric, ..params(vec![10]) }));
+        assert_ne!(base, key(&params(vec![11])));
+        // Level 1's key does not depend on later levels.
+        assert_eq!(base, key(&params(vec![10, 5])));
+    }
+}

@@ -1,0 +1,104 @@
+//! The hierarchy stage (issue 13) on the bundled sample: `hierarchy.npz` reads back with
+//! the documented shapes and nested maps, changing `levels[1]` re-runs only the level-2
+//! stage, and `desal hierarchy` writes the same npz bytes as `desal run`.
+
+use std::path::Path;
+
+use desal_io::npz::read_hierarchy_npz;
+
+use crate::support::*;
+
+/// The sample pipeline of `pipelines/sample-hierarchy.toml`, with absolute paths and the
+/// given second level, writing into `dir/out`.
+fn write_pipeline(dir: &Path, level2: usize) -> std::path::PathBuf {
+    let samples = Path::new(env!("CARGO_MANIFEST_DIR")).join("data-samples");
+    let text = format!(
+        "schema = 1\nout = \"out\"\n[[dataset]]\nname = \"sample\"\nposes = \"{}/poses/*.ply\"\n\
+         template = \"00_rest\"\nlabels = \"{}/labels.json\"\nup_axis = \"y\"\n\
+         [dataset.simplify]\ntarget_vertices = 2500\nplacement = \"optimal\"\nsaliency = true\nbalance = true\n\
+         [dataset.hierarchy]\nlevels = [2500, {level2}]\n",
+        samples.display(),
+        samples.display()
+    );
+    let path = dir.join("p.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn run(pipeline: &Path) -> serde_json::Value {
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "desal failed: {}", stderr(&out));
+    let report = pipeline.parent().unwrap().join("out/sample/report.json");
+    serde_json::from_slice(&std::fs::read(report).unwrap()).unwrap()
+}
+
+/// `(stage name, cached)` of every stage record, in run order.
+fn stages(report: &serde_json::Value) -> Vec<(String, bool)> {
+    let records = report["stages"].as_array().unwrap();
+    records.iter().map(|s| (s["name"].as_str().unwrap().to_owned(), s["cached"].as_bool().unwrap())).collect()
+}
+
+#[test]
+fn sample_hierarchy_reads_back_reruns_one_level_and_matches_the_single_stage_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = write_pipeline(dir.path(), 625);
+    run(&pipeline);
+    let out = dir.path().join("out/sample");
+
+    // The documented shapes: levels, F, D (n_{k+1} × n_k), U (n_k × n_{k+1}), A, maps.
+    let h = read_hierarchy_npz(&out.join("hierarchy.npz")).unwrap();
+    assert_eq!(h.levels, [13380, 2500, 625], "the sample has 13380 vertices; the levels are the file's");
+    for k in 0..2 {
+        let (fine, coarse) = (h.levels[k], h.levels[k + 1]);
+        assert_eq!(h.down[k].shape, [coarse, fine]);
+        assert_eq!(h.up[k].shape, [fine, coarse]);
+        assert_eq!(h.map[k].len(), coarse);
+        assert_eq!(h.orig[k].len(), coarse);
+        // D has one 1 per row, at map{k+1}.
+        assert_eq!(h.down[k].row, (0..coarse as u32).collect::<Vec<_>>());
+        assert_eq!(h.down[k].col, h.map[k]);
+        // U's rows sum to 1 (rounding only).
+        let mut sums = vec![0.0; fine];
+        for (&r, &v) in h.up[k].row.iter().zip(&h.up[k].data) {
+            sums[r as usize] += v;
+        }
+        assert!(sums.iter().all(|s| (s - 1.0).abs() < 1e-9), "level {k}: U rows sum to 1");
+    }
+    for k in 0..3 {
+        assert_eq!(h.adjacency[k].shape, [h.levels[k], h.levels[k]]);
+        assert!(h.faces[k].iter().flatten().all(|&v| (v as usize) < h.levels[k]));
+    }
+    // The maps nest: orig2[i] = orig1[map2[i]], and orig1 = map1.
+    assert_eq!(h.orig[0], h.map[0]);
+    assert!(h.map[1].iter().zip(&h.orig[1]).all(|(&m, &o)| h.orig[0][m as usize] == o));
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("hierarchy.json")).unwrap()).unwrap();
+    assert_eq!(json["levels"], serde_json::json!([13380, 2500, 625]));
+    assert_eq!(json["steps"][1]["heldout_fitted"]["folds"].as_array().unwrap().len(), 2);
+
+    // The single-stage command on the run's artifacts writes the same bytes.
+    let single = dir.path().join("single.npz");
+    let (poses, labels) = (out.join("poses.dsa"), out.join("labels.dsa"));
+    let cli = desal(&[
+        "hierarchy",
+        "--poses",
+        poses.to_str().unwrap(),
+        "--labels",
+        labels.to_str().unwrap(),
+        "--levels",
+        "2500,625",
+        "--balance",
+        "-o",
+        single.to_str().unwrap(),
+    ]);
+    assert!(cli.status.success(), "desal hierarchy failed: {}", stderr(&cli));
+    assert!(std::fs::read(&single).unwrap() == std::fs::read(out.join("hierarchy.npz")).unwrap());
+
+    // Changing levels[1] re-runs the level-2 stage only.
+    let pipeline = write_pipeline(dir.path(), 600);
+    let report = run(&pipeline);
+    let ran: Vec<String> = stages(&report).into_iter().filter(|(_, c)| !c).map(|(n, _)| n).collect();
+    assert_eq!(ran, ["hierarchy-2"], "level 1 from the cache, level 2 recomputed: {report}");
+    assert!(stages(&report).contains(&("hierarchy-1".to_owned(), true)), "{report}");
+    assert_eq!(read_hierarchy_npz(&out.join("hierarchy.npz")).unwrap().levels, [13380, 2500, 600]);
+}
