@@ -102,3 +102,30 @@ fn sample_hierarchy_reads_back_reruns_one_level_and_matches_the_single_stage_com
     assert!(stages(&report).contains(&("hierarchy-1".to_owned(), true)), "{report}");
     assert_eq!(read_hierarchy_npz(&out.join("hierarchy.npz")).unwrap().levels, [13380, 2500, 600]);
 }
+
+/// A bad `[dataset.hierarchy]` is refused when the pipeline file is read, naming the
+/// rule, before any stage runs (no output folder appears).
+#[test]
+fn bad_hierarchy_tables_are_refused_when_the_pipeline_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = write_pipeline(dir.path(), 625);
+    let text = std::fs::read_to_string(&pipeline).unwrap();
+    let cases = [
+        ("levels = [2500, 625]", "levels = [625, 2500]", "strictly decreasing"),
+        ("levels = [2500, 625]", "levels = [2500, 3]", "too small"),
+        (
+            "levels = [2500, 625]\n",
+            "levels = [2500, 625]\nupsampler = \"barycentric\"\nridge = 0.1\n",
+            "fitted upsampler only",
+        ),
+        ("levels = [2500, 625]\n", "levels = [2500, 625]\nupsampler = \"nearest\"\n", "nearest"),
+    ];
+    for (from, to, message) in cases {
+        std::fs::write(&pipeline, text.replace(from, to)).unwrap();
+        let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+        let err = stderr(&out);
+        assert!(!out.status.success(), "{to}: refused");
+        assert!(err.contains(message), "{to}: {err}");
+        assert!(!dir.path().join("out").exists(), "{to}: nothing written");
+    }
+}
