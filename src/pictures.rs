@@ -53,21 +53,10 @@ pub fn write_scalar_ply(path: &Path, mesh: &TriMesh, name: &str, values: &[f64])
     Ok(())
 }
 
-/// The parts on the template, one colour each, as PNG bytes (`parts.png`): each face
-/// takes the part of the majority of its corners (ties: its first corner's), and part
-/// `k` the colour-map value `frac(k · φ)`, so parts with neighbouring ids get far-apart
-/// colours.
+/// The parts on the template, one colour each (`desal_viz::part_face_values`), as PNG
+/// bytes (`parts.png`).
 pub fn parts_png(mesh: &TriMesh, labels: &PartLabels, up: Option<Direction>) -> Result<Vec<u8>> {
-    let golden = (5f64.sqrt() - 1.0) / 2.0;
-    let values: Vec<f64> = mesh
-        .faces
-        .iter()
-        .map(|f| {
-            let [a, b, c] = f.map(|v| labels.labels[v as usize]);
-            let part = if b == c { b } else { a };
-            (part as f64 * golden).fract()
-        })
-        .collect();
+    let values = desal_viz::part_face_values(&mesh.faces, &labels.labels);
     let config = RenderConfig {
         up,
         title: format!("{} parts", labels.part_count()),

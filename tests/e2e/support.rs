@@ -15,30 +15,7 @@ pub fn shared_dataset(name: &str) -> Option<PathBuf> {
 
 /// A closed tube along +y: `rings` rings of `segments` vertices plus two cap centres.
 pub fn tube(rings: usize, segments: usize) -> TriMesh {
-    let mut positions = Vec::new();
-    for r in 0..rings {
-        for s in 0..segments {
-            let a = s as f64 / segments as f64 * std::f64::consts::TAU;
-            positions.push(Vec3::new(0.1 * a.cos(), r as f64 * 0.05, 0.1 * a.sin()));
-        }
-    }
-    let bottom = positions.len() as u32;
-    positions.push(Vec3::new(0.0, 0.0, 0.0));
-    let top = positions.len() as u32;
-    positions.push(Vec3::new(0.0, (rings - 1) as f64 * 0.05, 0.0));
-    let idx = |r: usize, s: usize| (r * segments + s % segments) as u32;
-    let mut faces = Vec::new();
-    for r in 0..rings - 1 {
-        for s in 0..segments {
-            faces.push([idx(r, s), idx(r + 1, s), idx(r + 1, s + 1)]);
-            faces.push([idx(r, s), idx(r + 1, s + 1), idx(r, s + 1)]);
-        }
-    }
-    for s in 0..segments {
-        faces.push([bottom, idx(0, s), idx(0, s + 1)]);
-        faces.push([top, idx(rings - 1, s + 1), idx(rings - 1, s)]);
-    }
-    TriMesh { positions, faces }
+    desal_testdata::golden::tube_shaped(rings, segments, 0.0, 0.0)
 }
 
 /// Bends the upper half of `mesh` (y above the middle) about the z axis by `angle`.

@@ -32,8 +32,7 @@ use nalgebra::{SMatrix, SVector};
 use rayon::prelude::*;
 
 use crate::error::EvalError;
-use crate::folds::check_training_poses;
-use crate::transform::{PartTransform, check_pose_transforms};
+use crate::transform::{PartTransform, check_model_inputs, check_pose_transforms};
 
 /// The most influences a vertex can have (the usual GPU skinning limit).
 pub const MAX_INFLUENCES: usize = 4;
@@ -105,7 +104,7 @@ pub fn fit_lbs(
     training_poses: &[usize],
     config: &LbsConfig,
 ) -> Result<LbsModel, EvalError> {
-    check_inputs(poses, labels, transforms, training_poses)?;
+    check_model_inputs(poses, labels, transforms, training_poses, check_pose_transforms)?;
     let template = poses.template_positions();
     let max_influences = config.max_influences.clamp(1, MAX_INFLUENCES);
     let priors = prior_weights(template.len(), &poses.faces, labels, config.rings, max_influences);
@@ -181,28 +180,6 @@ impl LbsModel {
             .map(|(v, x)| self.weights(v).iter().map(|&(p, w)| w * transforms[p as usize].apply(x)).sum())
             .collect()
     }
-}
-
-fn check_inputs(
-    poses: &PoseSet,
-    labels: &PartLabels,
-    transforms: &[Vec<PartTransform>],
-    training_poses: &[usize],
-) -> Result<(), EvalError> {
-    if labels.vertex_count() != poses.vertex_count() {
-        return Err(EvalError::LabelCountMismatch {
-            labels: labels.vertex_count(),
-            vertices: poses.vertex_count(),
-        });
-    }
-    if transforms.len() != poses.pose_count() {
-        return Err(EvalError::RotationPoseCount { expected: poses.pose_count(), found: transforms.len() });
-    }
-    check_training_poses(poses.pose_count(), training_poses)?;
-    for &pose in training_poses {
-        check_pose_transforms(&transforms[pose], labels.part_count(), pose)?;
-    }
-    Ok(())
 }
 
 /// Step 1: per vertex, its candidate bones and their normalised diffused weights

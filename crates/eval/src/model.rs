@@ -28,7 +28,6 @@ use desal_mesh::{Face, Mat3, PartLabels, PoseSet, Real, Vec3};
 use rayon::prelude::*;
 
 use crate::error::EvalError;
-use crate::folds::check_training_poses;
 use crate::gradient::{deformation_gradient, inverse_template_frame};
 use crate::poisson::{AnchoredPoissonSolver, PoissonSolver};
 use crate::ridge::{
@@ -36,7 +35,9 @@ use crate::ridge::{
     mask_features, regress_triangle,
 };
 use crate::skeleton::Skeleton;
-use crate::transform::{PartTransform, check_pose_transforms, rotations_of};
+use crate::transform::{
+    PartTransform, check_model_inputs, check_pose_rotations, check_pose_transforms, rotations_of,
+};
 
 /// How the twist regression's ridge and features are set.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -188,7 +189,7 @@ pub fn fit_model(
     training_poses: &[usize],
     config: &ModelConfig,
 ) -> Result<Model, EvalError> {
-    check_inputs(poses, labels, rotations, training_poses)?;
+    check_model_inputs(poses, labels, rotations, training_poses, check_pose_rotations)?;
     let template = poses.template_positions();
     let skeleton = Skeleton::new(template, &poses.faces, labels, config.root_part);
     let inverse_frames = invert_template_frames(poses)?;
@@ -434,46 +435,8 @@ impl Model {
     }
 
     fn check_rotations(&self, rotations: &[Mat3], pose: usize) -> Result<(), EvalError> {
-        if rotations.len() != self.part_count {
-            return Err(EvalError::RotationPartCount {
-                pose,
-                expected: self.part_count,
-                found: rotations.len(),
-            });
-        }
-        if let Some(part) = rotations.iter().position(|r| !r.iter().all(|x| x.is_finite())) {
-            return Err(EvalError::NonFiniteRotation { pose, part });
-        }
-        Ok(())
+        check_pose_rotations(rotations, self.part_count, pose)
     }
-}
-
-fn check_inputs(
-    poses: &PoseSet,
-    labels: &PartLabels,
-    rotations: &[Vec<Mat3>],
-    training_poses: &[usize],
-) -> Result<(), EvalError> {
-    if labels.vertex_count() != poses.vertex_count() {
-        return Err(EvalError::LabelCountMismatch {
-            labels: labels.vertex_count(),
-            vertices: poses.vertex_count(),
-        });
-    }
-    if rotations.len() != poses.pose_count() {
-        return Err(EvalError::RotationPoseCount { expected: poses.pose_count(), found: rotations.len() });
-    }
-    check_training_poses(poses.pose_count(), training_poses)?;
-    for &pose in training_poses {
-        let r = &rotations[pose];
-        if r.len() != labels.part_count() {
-            return Err(EvalError::RotationPartCount { pose, expected: labels.part_count(), found: r.len() });
-        }
-        if let Some(part) = r.iter().position(|m| !m.iter().all(|x| x.is_finite())) {
-            return Err(EvalError::NonFiniteRotation { pose, part });
-        }
-    }
-    Ok(())
 }
 
 /// `V̂⁻¹` per template triangle; a zero-area triangle is an error naming the face.

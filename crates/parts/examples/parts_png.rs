@@ -121,20 +121,10 @@ fn read_poses(dir: &Path) -> PoseSet {
         .expect("registered poses")
 }
 
-/// The parts on the template: each face takes the part of the majority of its corners
-/// (ties: its first corner's), and part `k` the colour-map value `frac(k · φ)`, so
-/// parts with neighbouring ids get far-apart colours.
+/// The parts on the template, one colour each (`desal_viz::part_face_values`, the rule
+/// `parts.png` uses too).
 fn draw(poses: &PoseSet, labels: &PartLabels, title: &str) -> RgbaImage {
-    let golden = (5f64.sqrt() - 1.0) / 2.0;
-    let values: Vec<f64> = poses
-        .faces
-        .iter()
-        .map(|f| {
-            let [a, b, c] = f.map(|v| labels.labels[v as usize]);
-            let part = if b == c { b } else { a };
-            (part as f64 * golden).fract()
-        })
-        .collect();
+    let values = desal_viz::part_face_values(&poses.faces, &labels.labels);
     let config = RenderConfig {
         title: title.into(),
         range: Some((0.0, 1.0)),

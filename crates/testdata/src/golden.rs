@@ -1,4 +1,5 @@
-//! Inputs and a hash for the stage crates' golden tests (`crates/<stage>/tests/golden.rs`):
+//! Inputs and a hash for the stage crates' golden tests (`crates/<stage>/tests/golden.rs`)
+//! (its tube also builds the end-to-end tests' pose set):
 //! a small fixed body-like input and an FNV-1a hash of an output's exact bits. A golden
 //! test fails when a stage's output changes, and its message says which `VERSION` to
 //! bump (the driver's cache keys carry it).
@@ -8,18 +9,26 @@ use desal_mesh::{PartLabels, PoseSet, TriMesh, Vec3};
 /// A closed tube along +y, `rings` rings of `segments` vertices plus two cap centres,
 /// with a slight deterministic wobble so no two edges cost exactly the same.
 pub fn tube(rings: usize, segments: usize) -> TriMesh {
+    tube_shaped(rings, segments, 0.01, 0.02)
+}
+
+/// A closed tube along +y (radius 0.1, rings 0.05 apart): `rings` rings of `segments`
+/// vertices, each radius wobbled by up to `wobble` (deterministically), plus two cap
+/// centres lifted `cap_lift` beyond the end rings. `tube_shaped(r, s, 0.0, 0.0)` is the
+/// plain tube of the end-to-end tests.
+pub fn tube_shaped(rings: usize, segments: usize, wobble: f64, cap_lift: f64) -> TriMesh {
     let mut positions = Vec::new();
     for r in 0..rings {
         for s in 0..segments {
             let a = s as f64 / segments as f64 * std::f64::consts::TAU;
-            let radius = 0.1 + 0.01 * ((r * 7 + s * 3) % 5) as f64 / 5.0;
+            let radius = 0.1 + wobble * ((r * 7 + s * 3) % 5) as f64 / 5.0;
             positions.push(Vec3::new(radius * a.cos(), r as f64 * 0.05, radius * a.sin()));
         }
     }
     let bottom = positions.len() as u32;
-    positions.push(Vec3::new(0.0, -0.02, 0.0));
+    positions.push(Vec3::new(0.0, 0.0 - cap_lift, 0.0));
     let top = positions.len() as u32;
-    positions.push(Vec3::new(0.0, (rings - 1) as f64 * 0.05 + 0.02, 0.0));
+    positions.push(Vec3::new(0.0, (rings - 1) as f64 * 0.05 + cap_lift, 0.0));
     let idx = |r: usize, s: usize| (r * segments + s % segments) as u32;
     let mut faces = Vec::new();
     for r in 0..rings - 1 {

@@ -54,6 +54,22 @@ pub fn colormap(t: f64) -> [u8; 3] {
     [0, 1, 2].map(|c| (a[c] as f64 + f * (b[c] as f64 - a[c] as f64)).round() as u8)
 }
 
+/// Per-face colour-map values that draw part labels (`labels[v]` per vertex) one colour
+/// each: a face takes the part of the majority of its corners (ties: its first corner's),
+/// and part `k` the value `frac(k · φ)`, so parts with neighbouring ids get far-apart
+/// colours. For [`crate::Scalar::PerFace`] over the range `[0, 1]`.
+pub fn part_face_values(faces: &[[u32; 3]], labels: &[u32]) -> Vec<f64> {
+    let golden = (5f64.sqrt() - 1.0) / 2.0;
+    faces
+        .iter()
+        .map(|f| {
+            let [a, b, c] = f.map(|v| labels[v as usize]);
+            let part = if b == c { b } else { a };
+            (part as f64 * golden).fract()
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -87,5 +103,21 @@ mod tests {
         let luminance = |c: [u8; 3]| 0.2126 * c[0] as f64 + 0.7152 * c[1] as f64 + 0.0722 * c[2] as f64;
         let values: Vec<f64> = (0..=100).map(|k| luminance(colormap(k as f64 / 100.0))).collect();
         assert!(values.windows(2).all(|w| w[1] >= w[0] - 0.5), "{values:?}");
+    }
+}
+
+#[cfg(test)]
+mod part_value_tests {
+    use super::*;
+
+    /// Two corners agreeing decide the face; otherwise the first corner does. Part 0 is
+    /// value 0 and part 1 is `frac(φ)`.
+    #[test]
+    fn a_face_takes_its_majority_part_else_its_first_corner() {
+        let golden = (5f64.sqrt() - 1.0) / 2.0;
+        let labels = [0, 1, 1, 2];
+        assert_eq!(part_face_values(&[[0, 1, 2]], &labels), vec![golden]);
+        assert_eq!(part_face_values(&[[0, 1, 3]], &labels), vec![0.0]);
+        assert_eq!(part_face_values(&[[3, 0, 0]], &labels), vec![0.0]);
     }
 }

@@ -20,7 +20,7 @@ pub mod image;
 pub mod plot;
 pub mod render;
 
-pub use colormap::colormap;
+pub use colormap::{colormap, part_face_values};
 pub use error::VizError;
 pub use image::{RgbaImage, encode_png};
 pub use plot::{PlotConfig, PlotFrame, Series, plot_frame, render_line_plot};
