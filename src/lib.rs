@@ -9,6 +9,7 @@ pub mod cache;
 pub mod cli;
 pub mod evaluate;
 pub mod inspect;
+pub mod memory;
 pub mod outputs;
 pub mod pictures;
 pub mod pipeline;

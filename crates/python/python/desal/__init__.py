@@ -1,0 +1,362 @@
+"""desal: simplify deformable human body meshes so that they still deform well.
+
+NumPy arrays in, NumPy arrays out. Every stage of ``desal run`` is here, computed by the
+same Rust code, so the same arrays give the same bytes as the command line:
+
+>>> import desal, numpy as np
+>>> ps = desal.PoseSet(poses, faces, labels, template=0)       # (P, V, 3), (F, 3), (V,)
+>>> out = desal.simplify_pose_set(ps, target_vertices=2500)    # the paper's method
+>>> out.poses.shape, out.vertex_map.shape                      # (P, 2500, 3), (2500,)
+
+Stages one at a time: :func:`fit`, :func:`saliency`, :func:`simplify` (any mesh),
+:func:`map`. Multi-level hierarchies for mesh networks: :func:`hierarchy`,
+:func:`load_hierarchy`, :func:`save_graphcmr`. The driver with its cache: :func:`run`.
+Any artifact: :func:`load`.
+
+Bad input raises :class:`InputError` (a ``ValueError``) with the CLI's message, naming
+the pose, vertex, face or part; a failure while computing raises :class:`Error`. The GIL
+is released while a stage computes. Long calls take ``progress=callback`` (called as
+``callback(step, done, total)``) or ``progress=desal.tqdm_progress()``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from os import PathLike
+from typing import Any, Callable, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _desal
+from ._desal import Error, Fit, InputError, PoseSet, Saliency, load, read_labels, read_mesh
+
+__version__ = _desal.__version__
+
+__all__ = [
+    "Error",
+    "Fit",
+    "Hierarchy",
+    "InputError",
+    "PoseSet",
+    "Saliency",
+    "Simplification",
+    "fit",
+    "hierarchy",
+    "load",
+    "load_hierarchy",
+    "map",
+    "read_labels",
+    "read_mesh",
+    "run",
+    "save_graphcmr",
+    "saliency",
+    "simplify",
+    "simplify_pose_set",
+    "tqdm_progress",
+]
+
+Progress = Optional[Callable[[str, int, int], Any]]
+PathArg = Union[str, "PathLike[str]"]
+
+
+def _options(**values: Any) -> str:
+    """Stage options as the JSON of a pipeline file's table (unset values left out)."""
+    return json.dumps({k: v for k, v in values.items() if v is not None})
+
+
+def _pose_set(poses: Any, faces: Any, labels: Any, template: int, progress: Progress) -> PoseSet:
+    if isinstance(poses, PoseSet):
+        if faces is not None or labels is not None:
+            raise InputError("faces, labels: give them with arrays, not with a PoseSet")
+        return poses
+    if faces is None:
+        raise InputError("faces: required with pose arrays")
+    return PoseSet(poses, faces, labels, template=template, progress=progress)
+
+
+def fit(ps: PoseSet, method: str = "rigid", progress: Progress = None) -> Fit:
+    """Stage 1: a rigid fit per body part per pose.
+
+    ``method`` is ``"rigid"`` (Kabsch, proper rotations) or ``"affine"`` (the paper's
+    literal fit). The result has ``rotations`` (P, K, 3, 3), ``translations`` (P, K, 3),
+    ``residuals`` (P, V) and ``report``.
+    """
+    return _desal.fit(ps, _options(method=method), progress)
+
+
+def saliency(
+    ps: PoseSet,
+    fit: Optional[Fit] = None,
+    squared: bool = False,
+    percentile: float = 100.0,
+    exclude: Sequence[str] = (),
+    floor: Optional[float] = None,
+) -> Saliency:
+    """Stage 2: per-vertex deformation saliency from a fit (computed when None).
+
+    The result has ``saliency`` (V,) in [0, 1], ``weights`` (V,) in [floor, 1] (what
+    :func:`simplify` takes), ``raw`` and ``report``. ``exclude`` names poses left out of
+    the sum; ``percentile`` < 100 normalises by that percentile instead of the maximum.
+    """
+    if fit is None:
+        fit = _desal.fit(ps, None, None)
+    options = _options(squared=squared, percentile=percentile, exclude=list(exclude), floor=floor)
+    return _desal.saliency(ps, fit, options)
+
+
+def simplify(
+    vertices: Any,
+    faces: Any,
+    target_vertices: Optional[int] = None,
+    target_faces: Optional[int] = None,
+    ratio: Optional[float] = None,
+    weights: Any = None,
+    placement: str = "optimal",
+    balance: bool = False,
+    metric: str = "quadric",
+    labels: Any = None,
+    keep_part_borders: bool = False,
+    boundary_weight: Optional[float] = None,
+    progress: Progress = None,
+) -> tuple[np.ndarray, np.ndarray, dict]:
+    """Stage 3 on any mesh: quadric edge collapse, weighted by ``weights`` when given.
+
+    Give one of ``target_vertices``, ``target_faces`` and ``ratio`` (none: ratio 0.2).
+    ``placement`` is ``"optimal"`` (the quadric's best point) or ``"subset"`` (keep
+    original vertices); ``balance`` multiplies the cost by the edge length (the paper's
+    balance term); ``metric`` is ``"quadric"`` or ``"lindstrom-turk"``. With
+    ``keep_part_borders``, vertices between two ``labels`` stay. The defaults are the
+    library's, as in ``desal run``.
+
+    Returns ``(vertices (n, 3) float64, faces (m, 3) int64, report)``; the report has the
+    stage summary and ``simp_to_orig`` ((n,) int64, -1 for a moved vertex).
+    """
+    options = _options(
+        target_vertices=target_vertices,
+        target_faces=target_faces,
+        ratio=ratio,
+        placement=placement,
+        balance=balance,
+        metric=metric,
+        keep_part_borders=keep_part_borders,
+        boundary_weight=boundary_weight,
+    )
+    return _desal.simplify(vertices, faces, options, weights, labels, progress)
+
+
+def map(  # noqa: A001 - the stage's name
+    ps: PoseSet, simplified_vertices: Any, simplified_faces: Any, simp_to_orig: Any = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Stage 4: each simplified vertex's original vertex, applied to every pose.
+
+    ``simp_to_orig`` (from :func:`simplify`'s report) maps kept vertices exactly; the
+    rest, or every vertex of another tool's mesh, are mapped by the paper's greedy rule.
+    Returns ``(simp_to_orig (n,) int64, poses (P, n, 3) float64)``.
+    """
+    return _desal.map(ps, simplified_vertices, simplified_faces, simp_to_orig)
+
+
+@dataclass
+class Simplification:
+    """A simplified pose set: what ``desal run`` writes to its output folder."""
+
+    #: (n,) int64: the original vertex of each simplified vertex (``vertex_map.txt``).
+    vertex_map: np.ndarray
+    #: (m, 3) int64 triangles over the simplified vertices.
+    faces: np.ndarray
+    #: (P, n, 3) float64: every pose at the simplified vertices (registered).
+    poses: np.ndarray
+    #: (n,) int64 part labels of the simplified vertices.
+    labels: np.ndarray
+    #: (V,) float64 deformation saliency of the input's vertices.
+    saliency: np.ndarray
+    #: (V,) float64 stage-3 weights of the input's vertices.
+    weights: np.ndarray
+    #: (n, 3) float64 simplified template as stage 3 placed it.
+    simplified_vertices: np.ndarray
+    #: Every stage's summary.
+    report: dict = field(repr=False)
+
+
+def simplify_pose_set(
+    poses: Any,
+    faces: Any = None,
+    labels: Any = None,
+    target_vertices: Optional[int] = None,
+    method: str = "paper",
+    placement: str = "optimal",
+    template: int = 0,
+    target_faces: Optional[int] = None,
+    ratio: Optional[float] = None,
+    fit_method: str = "rigid",
+    saliency_options: Optional[dict] = None,
+    simplify_options: Optional[dict] = None,
+    progress: Progress = None,
+) -> Simplification:
+    """The whole pipeline on one pose set, as ``desal run`` computes it.
+
+    ``poses`` is a :class:`PoseSet`, or (P, V, 3) arrays with ``faces`` (F, 3) and
+    ``labels`` (V,) (None: parts discovered from the poses). ``method`` is ``"paper"``
+    (saliency and balance), ``"qslim"``, ``"saliency"``, ``"balance"`` or
+    ``"multipose"`` (multi-pose QEM, subset placement). ``saliency_options`` and
+    ``simplify_options`` take the keys of a pipeline file's ``[dataset.saliency]`` and
+    ``[dataset.simplify]`` tables.
+    """
+    ps = _pose_set(poses, faces, labels, template, progress)
+    simplify_table = dict(simplify_options or {})
+    simplify_table.update(
+        {k: v for k, v in dict(target_vertices=target_vertices, target_faces=target_faces, ratio=ratio).items() if v is not None}
+    )
+    simplify_table["placement"] = placement
+    out = _desal.simplify_pose_set(
+        ps,
+        method,
+        _options(method=fit_method),
+        json.dumps(saliency_options or {}),
+        json.dumps(simplify_table),
+        progress,
+    )
+    return Simplification(**out)
+
+
+class Hierarchy:
+    """Levels 0..L of a mesh hierarchy, in the layout of ``hierarchy.npz``.
+
+    ``levels[k]`` vertices and ``faces[k]`` triangles per level; per step k → k+1 the
+    down-sampler ``D[k]`` (n_{k+1} × n_k, a selection), the up-sampler ``U[k]``
+    (n_k × n_{k+1}, rows sum to 1), ``map[k]`` (level k+1's vertex → level k's) and
+    ``orig[k]`` (level k+1's vertex → level 0's); ``A[k]`` is level k's adjacency.
+    Matrices are ``scipy.sparse`` CSC when scipy is installed, else (row, col, data,
+    shape) COO tuples.
+    """
+
+    def __init__(self, arrays: dict, report: Any = None):
+        self.arrays = dict(arrays)
+        self.report = report
+        self.levels = [int(n) for n in self.arrays["levels"]]
+        steps = len(self.levels) - 1
+        self.faces = [self.arrays[f"F{k}"] for k in range(steps + 1)]
+        self.A = [self._matrix(f"A{k}") for k in range(steps + 1)]
+        self.D = [self._matrix(f"D{k}") for k in range(steps)]
+        self.U = [self._matrix(f"U{k}") for k in range(steps)]
+        self.map = [self.arrays[f"map{k + 1}"] for k in range(steps)]
+        self.orig = [self.arrays[f"orig{k + 1}"] for k in range(steps)]
+
+    def _matrix(self, key: str) -> Any:
+        row, col, data = (self.arrays[f"{key}_{p}"] for p in ("row", "col", "data"))
+        shape = tuple(int(n) for n in self.arrays[f"{key}_shape"])
+        try:
+            import scipy.sparse
+        except ImportError:
+            return (row, col, data, shape)
+        return scipy.sparse.coo_matrix((data, (row, col)), shape=shape).tocsc()
+
+    def save(self, path: PathArg) -> None:
+        """Writes ``hierarchy.npz``, the bytes ``desal run`` writes."""
+        _desal.write_hierarchy_npz(str(path), self.arrays)
+
+    def __repr__(self) -> str:
+        return f"Hierarchy(levels={self.levels})"
+
+
+def hierarchy(
+    poses: Any,
+    levels: Sequence[int],
+    faces: Any = None,
+    labels: Any = None,
+    upsampler: str = "fitted",
+    neighbours: Optional[int] = None,
+    ridge: Optional[float] = None,
+    neighbourhood: Optional[str] = None,
+    method: str = "paper",
+    placement: str = "optimal",
+    template: int = 0,
+    simplify_options: Optional[dict] = None,
+    progress: Progress = None,
+) -> Hierarchy:
+    """A multi-level hierarchy for mesh networks (COMA / GraphCMR style).
+
+    ``levels`` are the coarse vertex counts, strictly decreasing (e.g. ``[2500, 625]``).
+    Each level is simplified from the one above by ``method``; ``upsampler`` is
+    ``"fitted"`` (least squares over the poses) or ``"barycentric"`` (COMA's rule).
+    The same as ``[dataset.hierarchy]`` in a pipeline file.
+    """
+    ps = _pose_set(poses, faces, labels, template, progress)
+    options = _options(
+        levels=list(levels), upsampler=upsampler, neighbours=neighbours, ridge=ridge, neighbourhood=neighbourhood
+    )
+    simplify_table = dict(simplify_options or {})
+    simplify_table["placement"] = placement
+    arrays, report = _desal.hierarchy(ps, options, method, None, None, json.dumps(simplify_table), progress)
+    return Hierarchy(arrays, report)
+
+
+def load_hierarchy(path: PathArg) -> Hierarchy:
+    """Reads ``hierarchy.npz`` as ``desal run`` writes it (the layout is checked)."""
+    return Hierarchy(_desal.read_hierarchy_npz(str(path)))
+
+
+def save_graphcmr(h: Hierarchy, path: PathArg) -> None:
+    """Writes GraphCMR's own layout: object arrays of ``scipy.sparse`` CSC matrices under
+    ``A``, ``D``, ``U`` and the faces under ``F``. GraphCMR's code loads it unchanged with
+    ``np.load(path, allow_pickle=True, encoding="latin1")``. Needs scipy.
+    """
+    import scipy.sparse  # noqa: F401 - required: the file holds scipy matrices
+
+    def objects(items: list) -> np.ndarray:
+        out = np.empty(len(items), dtype=object)
+        for k, item in enumerate(items):
+            out[k] = item
+        return out
+
+    with open(path, "wb") as f:
+        np.savez(f, A=objects(h.A), D=objects(h.D), U=objects(h.U), F=objects(h.faces))
+
+
+def run(
+    pipeline: PathArg,
+    out: Optional[PathArg] = None,
+    force: bool = False,
+    from_stage: Optional[str] = None,
+    jobs: int = 1,
+    cache_dir: Optional[PathArg] = None,
+    explain: bool = False,
+    progress: bool = False,
+) -> list:
+    """Runs a pipeline file with the cache, as ``desal run`` does.
+
+    Returns one report per dataset (``report.json``'s content). ``from_stage`` recomputes
+    that stage and the ones after it; ``progress`` shows the CLI's bars on stderr.
+    """
+    return _desal.run(
+        str(pipeline),
+        None if out is None else str(out),
+        force,
+        from_stage,
+        jobs,
+        None if cache_dir is None else str(cache_dir),
+        explain,
+        progress,
+    )
+
+
+def tqdm_progress(**tqdm_kwargs: Any) -> Callable[[str, int, int], None]:
+    """A progress callback drawing one tqdm bar per step (needs tqdm)."""
+    from tqdm.auto import tqdm
+
+    state: dict = {}
+
+    def callback(step: str, done: int, total: int) -> None:
+        bar = state.get("bar")
+        if bar is None or state.get("step") != step or done == 0:
+            if bar is not None:
+                bar.close()
+            bar = state["bar"] = tqdm(total=total, desc=step, **tqdm_kwargs)
+            state["step"] = step
+        bar.update(done - bar.n)
+        if done >= total:
+            bar.close()
+            state["bar"] = None
+
+    return callback

@@ -1,0 +1,187 @@
+//! The stages on arrays already in memory, for library callers and the Python package
+//! (`crates/python`): the checks of ingest and the labels stage, and the stage chain of
+//! [`crate::stages::run_stages`], without files or the cache.
+//!
+//! **Invariant:** the same arrays give the same bytes as `desal run`. Positions pass
+//! through the pose-set artifact's f32 (`PoseSetV1`), as `desal run`'s do, and every
+//! stage is computed by the same `stages::*::compute` call in the same order.
+
+use anyhow::{Context, Result, bail};
+use desal_io::artifact::{FitV1, HierarchyLevelV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1};
+use desal_io::npz::HierarchyArrays;
+use desal_mesh::validate::clean_faces;
+use desal_mesh::{FaceCleanup, PartLabels, PoseSet, Progress};
+
+use crate::stages::fit::{FitParams, FitSummary};
+use crate::stages::hierarchy::{self, HierarchyParams, LevelSettings, LevelSummary};
+use crate::stages::map::{self, MapSummary};
+use crate::stages::parts::{self, PartsParams, PartsSummary};
+use crate::stages::runner::StageOutput;
+use crate::stages::saliency::{SaliencyParams, SaliencySummary};
+use crate::stages::simplify::{self, SimplifyParams, SimplifySummary};
+
+/// A pose set built from arrays: validated as ingest validates pose files.
+#[derive(Debug, Clone)]
+pub struct ArrayPoseSet {
+    pub set: PoseSet,
+    /// Degenerate and duplicate template faces that were removed (ingest warns of them).
+    pub cleanup: FaceCleanup,
+}
+
+/// Builds a pose set from per-pose positions (`positions[pose][vertex]`), one triangle
+/// list and the template index. Names default to `pose000`, `pose001`, …. Positions are
+/// stored at f32, the precision of the pose-set artifact `desal run` computes from.
+/// Errors name the pose and vertex or face, as ingest's do.
+pub fn pose_set(
+    names: Option<Vec<String>>,
+    positions: Vec<Vec<[f32; 3]>>,
+    faces: Vec<[u32; 3]>,
+    template: usize,
+) -> Result<ArrayPoseSet> {
+    let poses = positions.len();
+    if poses == 0 {
+        bail!("the pose list is empty: give at least one pose");
+    }
+    let names = match names {
+        Some(names) if names.len() != poses => {
+            bail!("names has {} entries but there are {poses} poses", names.len())
+        }
+        Some(names) => names,
+        None => (0..poses).map(|k| format!("pose{k:03}")).collect(),
+    };
+    if let Some((i, name)) = names.iter().enumerate().find(|(i, n)| names[..*i].contains(n)) {
+        bail!("pose name '{name}' is used twice (pose {i}); poses need distinct names");
+    }
+    if template >= poses {
+        bail!("template {template} is out of range for {poses} poses");
+    }
+    let vertices = positions[template].len();
+    if vertices > 0 {
+        desal_mesh::validate::check_face_indices(&faces, vertices).context("faces")?;
+    }
+    let (faces, cleanup) = clean_faces(&faces);
+    let body = PoseSetV1 { names, template: template as u32, faces, positions };
+    let set = body.to_pose_set().context("invalid pose set")?;
+    Ok(ArrayPoseSet { set, cleanup })
+}
+
+/// Part labels from one id per vertex (and the parts' names, else `part0`, `part1`, …),
+/// checked as the labels stage checks a labels file: one per vertex, no empty part,
+/// every part able to carry a rigid fit.
+pub fn labels(ids: Vec<u32>, names: Option<Vec<String>>, set: &PoseSet) -> Result<PartLabels> {
+    let labels = match names {
+        Some(names) => PartLabels::try_new(ids, names)?,
+        None => PartLabels::from_ids(ids),
+    };
+    labels.check_vertex_count(set.vertex_count())?;
+    if let Some(part) = labels.first_empty_part() {
+        bail!("part {part} ('{}') has no vertex", labels.names[part as usize]);
+    }
+    labels
+        .check_parts_fittable(set.template_positions())
+        .with_context(|| format!("part labels against the template '{}'", set.names[set.template]))?;
+    Ok(labels)
+}
+
+/// Parts discovered from the poses (`labels = "auto"`).
+pub fn discover_parts(params: &PartsParams, set: &PoseSet) -> Result<(PartLabels, PartsSummary)> {
+    let out = parts::compute(params, set)?;
+    Ok((out.body.to_labels()?, out.summary))
+}
+
+/// The stage parameters of one pose set, as a pipeline file's dataset table holds them.
+#[derive(Debug, Clone, Default)]
+pub struct StageParams {
+    pub fit: FitParams,
+    pub saliency: SaliencyParams,
+    pub simplify: SimplifyParams,
+}
+
+/// Stages 1–4 of one pose set, computed.
+#[derive(Debug, Clone)]
+pub struct Simplification {
+    pub fit: StageOutput<FitV1, FitSummary>,
+    pub saliency: StageOutput<SaliencyV1, SaliencySummary>,
+    pub simplified: StageOutput<SimplifiedV1, SimplifySummary>,
+    pub map: StageOutput<MapV1, MapSummary>,
+}
+
+/// Stage 1.
+pub fn fit(
+    params: &FitParams,
+    set: &PoseSet,
+    labels: &PartLabels,
+    progress: &dyn Progress,
+) -> Result<StageOutput<FitV1, FitSummary>> {
+    crate::stages::fit::compute(params, set, labels, progress)
+}
+
+/// Stage 2 from a stage-1 result of `set`.
+pub fn saliency(
+    params: &SaliencyParams,
+    set: &PoseSet,
+    fit: &FitV1,
+) -> Result<StageOutput<SaliencyV1, SaliencySummary>> {
+    crate::stages::saliency::compute(params, fit, set.template_mesh().diagonal())
+}
+
+/// Stages 1–4, in `desal run`'s order ([`crate::stages::run_stages`]).
+pub fn simplify_pose_set(
+    params: &StageParams,
+    set: &PoseSet,
+    labels: &PartLabels,
+    progress: &dyn Progress,
+) -> Result<Simplification> {
+    let config = params.simplify.config()?;
+    let fit = fit(&params.fit, set, labels, progress)?;
+    let saliency = saliency(&params.saliency, set, &fit.body)?;
+    let simplified =
+        simplify::compute(&config, &set.template_mesh(), &saliency.body.weights, labels, progress)?;
+    let map = map::compute(&simplified.body, set, labels)?;
+    Ok(Simplification { fit, saliency, simplified, map })
+}
+
+/// Stages 1–2 and multi-pose QEM (`desal eval`'s `multipose`, subset placement) with
+/// stage 4.
+pub fn simplify_pose_set_multipose(
+    params: &StageParams,
+    set: &PoseSet,
+    labels: &PartLabels,
+    progress: &dyn Progress,
+) -> Result<Simplification> {
+    let config = params.simplify.config()?;
+    let fit = fit(&params.fit, set, labels, progress)?;
+    let saliency = saliency(&params.saliency, set, &fit.body)?;
+    let simplified = simplify::compute_multipose(&config, set, labels)?;
+    let map = map::compute(&simplified.body, set, labels)?;
+    Ok(Simplification { fit, saliency, simplified, map })
+}
+
+/// The simplified pose set and its labels: `map` applied to every pose of `set`.
+pub fn apply_map(map: &MapV1, set: &PoseSet, labels: &PartLabels) -> Result<(PoseSet, PartLabels)> {
+    map::apply(map, set, labels)
+}
+
+/// A hierarchy of `set` (level 0) and its coarse levels, as `desal run` writes it to
+/// `hierarchy.npz`, with each level step's summary.
+pub fn hierarchy(
+    params: &StageParams,
+    hierarchy: &HierarchyParams,
+    set: &PoseSet,
+    labels: &PartLabels,
+    progress: &dyn Progress,
+) -> Result<(HierarchyArrays, Vec<LevelSummary>)> {
+    hierarchy.check_levels(Some(set.vertex_count()))?;
+    let settings =
+        LevelSettings { fit: &params.fit, saliency: &params.saliency, simplify: &params.simplify, hierarchy };
+    let mut levels: Vec<HierarchyLevelV1> = Vec::new();
+    let mut summaries = Vec::new();
+    for _ in 0..hierarchy.levels.len() {
+        let parents: Vec<&HierarchyLevelV1> = levels.iter().collect();
+        let out = hierarchy::compute_level(&settings, set, labels, &parents, progress)?;
+        levels.push(out.body);
+        summaries.push(out.summary);
+    }
+    let bodies: Vec<&HierarchyLevelV1> = levels.iter().collect();
+    Ok((hierarchy::npz_arrays(set.vertex_count(), &set.faces, &bodies)?, summaries))
+}
