@@ -131,8 +131,8 @@ fn check_columns(argument: &str, shape: &[usize], shape_text: &str) -> PyResult<
     Ok(())
 }
 
-/// `obj` as an int64 array (any integer dtype converts exactly; floats and the rest are
-/// refused).
+/// `obj` as an int64 array (any integer dtype converts exactly, int64 without a copy;
+/// floats and the rest are refused).
 fn int64_array<'py>(argument: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
     let py = obj.py();
     let np = py.import("numpy")?;
@@ -142,7 +142,9 @@ fn int64_array<'py>(argument: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'
         let dtype = array.getattr("dtype")?.str()?.to_string();
         return Err(bad(argument, format!("must be an integer array, not {dtype}")));
     }
-    array.call_method1("astype", ("int64",))
+    let kwargs = pyo3::types::PyDict::new(py);
+    kwargs.set_item("copy", false)?;
+    array.call_method("astype", ("int64",), Some(&kwargs))
 }
 
 /// Faces: a (faces, 3) integer array; every index non-negative and below `u32::MAX`.
