@@ -8,7 +8,8 @@
 //!   part-border vertex (a vertex with an edge to another part): the bands where
 //!   SCAPE's parts meet and the body bends;
 //! - **head/hands/feet**: otherwise, a part whose name contains `head`, `hand`, `foot`
-//!   or `feet` (SCAPE's and the sample's names; other label sets may have none);
+//!   or `feet` (SCAPE's and the sample's names). Labels whose names name none of these
+//!   (ids only, or discovered parts) have no such region: the table is joints vs other;
 //! - **other**: the rest (limb shafts, torso).
 //!
 //! A simplified face belongs to the region of its template centroid (joints) or of its
@@ -34,6 +35,8 @@ pub struct Regions {
     radius_sq: f64,
     /// Per part id: is it the head, a hand or a foot?
     extremity: Vec<bool>,
+    /// Whether any part is (the extremities region exists).
+    has_extremities: bool,
     /// The band half-width, input units (for the report).
     pub radius: f64,
 }
@@ -64,7 +67,7 @@ impl Regions {
         }
         let border: Vec<Vec3> =
             template.positions.iter().zip(&on_border).filter(|(_, b)| **b).map(|(p, _)| *p).collect();
-        let extremity = labels
+        let extremity: Vec<bool> = labels
             .names
             .iter()
             .map(|n| {
@@ -73,7 +76,14 @@ impl Regions {
             })
             .collect();
         let radius = JOINT_RADIUS * template.diagonal();
-        Self { border: VertexIndex::new(&border), radius_sq: radius * radius, extremity, radius }
+        let has_extremities = extremity.iter().any(|&e| e);
+        Self {
+            border: VertexIndex::new(&border),
+            radius_sq: radius * radius,
+            extremity,
+            has_extremities,
+            radius,
+        }
     }
 
     /// Region index (into [`REGIONS`]) of a point of part `part`.
@@ -87,7 +97,14 @@ impl Regions {
         }
     }
 
-    /// Per-region statistics of a simplified template `mesh` with per-vertex `labels`.
+    /// The regions in table order: all three, or joints and other when no part is an
+    /// extremity (indices into [`REGIONS`]).
+    pub fn present(&self) -> Vec<usize> {
+        if self.has_extremities { vec![0, 1, 2] } else { vec![0, 2] }
+    }
+
+    /// Per-region statistics of a simplified template `mesh` with per-vertex `labels`,
+    /// one row per region of [`Regions::present`].
     pub fn stats(&self, mesh: &TriMesh, labels: &PartLabels) -> Vec<RegionStats> {
         let mut faces = [0usize; 3];
         let mut areas = [0.0f64; 3];
@@ -106,7 +123,8 @@ impl Regions {
         for (p, &part) in mesh.positions.iter().zip(&labels.labels) {
             vertices[self.classify(p, part)] += 1;
         }
-        (0..3)
+        self.present()
+            .into_iter()
             .map(|r| RegionStats {
                 region: REGIONS[r],
                 faces: faces[r],
@@ -156,5 +174,22 @@ mod tests {
         // Face [0, 4, 3] is mostly hand; the other three are mostly arm.
         assert_eq!(stats.iter().map(|s| s.faces).collect::<Vec<_>>(), vec![0, 1, 3]);
         assert!((stats.iter().map(|s| s.total_area).sum::<f64>() - 2.0).abs() < 1e-12);
+    }
+
+    /// Labels without extremity names (ids only: `part0`, `part1`) give joints and other
+    /// only, with every face and vertex counted and no empty row.
+    #[test]
+    fn unnamed_parts_give_joints_and_other_only() {
+        let v = |x: f64, y: f64| Vec3::new(x, y, 0.0);
+        let mesh = TriMesh {
+            positions: vec![v(0.0, 0.0), v(1.0, 0.0), v(2.0, 0.0), v(0.0, 1.0), v(1.0, 1.0), v(2.0, 1.0)],
+            faces: vec![[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4]],
+        };
+        let labels = PartLabels::from_ids(vec![0, 1, 1, 0, 1, 1]);
+        let stats = Regions::new(&mesh, &labels).stats(&mesh, &labels);
+        assert_eq!(stats.iter().map(|s| s.region).collect::<Vec<_>>(), vec!["joints", "other"]);
+        assert_eq!(stats.iter().map(|s| s.vertices).sum::<usize>(), 6);
+        assert_eq!(stats.iter().map(|s| s.faces).sum::<usize>(), 4);
+        assert!(stats.iter().all(|s| s.faces == 0 || s.mean_face_area.is_finite()));
     }
 }

@@ -388,37 +388,47 @@ fn paper_comparison(md: &mut String, report: &EvalReport) {
 
 fn region_table(md: &mut String, report: &EvalReport) {
     let _ = writeln!(md, "## Where the vertices went (paper Figs. 4–5)\n");
+    let Some(first) = report.methods.first() else { return };
+    let names: Vec<&str> = first.regions.iter().map(|r| r.region).collect();
+    let extremities = names.contains(&"head/hands/feet");
     let _ = writeln!(
         md,
         "Faces of each simplified template by region: *joints* = within {:.1} cm of a part-border vertex (where \
-         the body bends), *head/hands/feet* = the rest of those parts, *other* = the rest. Mean face area in cm² \
-         (metre input); the paper's claim is that saliency moves vertices from head, hands and feet to the \
-         joints, i.e. a higher extremity / joint area ratio than QSlim's.\n",
-        report.joint_band_radius * 100.0
+         the body bends), {}*other* = the rest. Mean face area in cm² (metre input); the paper's claim is that \
+         saliency moves vertices from head, hands and feet to the joints, i.e. a higher extremity / joint area \
+         ratio than QSlim's.{}\n",
+        report.joint_band_radius * 100.0,
+        if extremities { "*head/hands/feet* = the rest of those parts, " } else { "" },
+        if extremities {
+            ""
+        } else {
+            " No part name names a head, hand or foot (labels without names, or discovered parts), so the \
+             table is joints vs other."
+        }
     );
-    let _ = writeln!(
-        md,
-        "| method | joints: vertices (%) | joints: mean area | head/hands/feet: vertices (%) | head/hands/feet: mean area | other: vertices (%) | other: mean area | area ratio extremities / joints |"
-    );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
+    let mut header = String::from("| method |");
+    for name in &names {
+        let _ = write!(header, " {name}: vertices (%) | {name}: mean area |");
+    }
+    if extremities {
+        header.push_str(" area ratio extremities / joints |");
+    }
+    let _ = writeln!(md, "{header}");
+    let _ = writeln!(md, "|---|{}", "---|".repeat(header.matches('|').count() - 2));
+    let area = |a: f64| if a.is_finite() { format!("{:.2}", a * 1e4) } else { "—".into() };
     for m in &report.methods {
-        let cell = |r: &RegionStats| {
-            (format!("{} ({:.1} %)", r.vertices, r.vertex_percent), format!("{:.2}", r.mean_face_area * 1e4))
-        };
-        let cells: Vec<(String, String)> = m.regions.iter().map(cell).collect();
-        let ratio = m.regions[1].mean_face_area / m.regions[0].mean_face_area;
-        let _ = writeln!(
-            md,
-            "| {} | {} | {} | {} | {} | {} | {} | {} |",
-            m.name,
-            cells[0].0,
-            cells[0].1,
-            cells[1].0,
-            cells[1].1,
-            cells[2].0,
-            cells[2].1,
-            if ratio.is_finite() { format!("{ratio:.2}") } else { "—".into() }
-        );
+        let mut row = format!("| {} |", m.name);
+        for r in &m.regions {
+            let _ = write!(row, " {} ({:.1} %) | {} |", r.vertices, r.vertex_percent, area(r.mean_face_area));
+        }
+        if extremities {
+            let find = |name: &str| {
+                m.regions.iter().find(|r| r.region == name).map_or(f64::NAN, |r| r.mean_face_area)
+            };
+            let ratio = find("head/hands/feet") / find("joints");
+            let _ = write!(row, " {} |", if ratio.is_finite() { format!("{ratio:.2}") } else { "—".into() });
+        }
+        let _ = writeln!(md, "{row}");
     }
     let _ = writeln!(md);
 }

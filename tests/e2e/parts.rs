@@ -154,4 +154,15 @@ fn desal_eval_runs_on_auto_labels() {
     assert!(change["v2v_percent"].is_f64() && change["v2f_percent"].is_f64(), "{change}");
     let labels = read_labels_dsa(&dir.path().join("out/sample/labels.dsa"));
     assert_eq!(labels.part_count(), 16);
+    // Discovered parts name no head, hand or foot: the regions are joints vs other, with
+    // every vertex in one of them and no NaN row (issue 17, item 5).
+    let regions = paper["regions"].as_array().unwrap();
+    let names: Vec<&str> = regions.iter().map(|r| r["region"].as_str().unwrap()).collect();
+    assert_eq!(names, ["joints", "other"]);
+    let vertices: u64 = regions.iter().map(|r| r["vertices"].as_u64().unwrap()).sum();
+    assert_eq!(vertices, 800);
+    let md = std::fs::read_to_string(dir.path().join("out/sample/eval/eval.md")).unwrap();
+    let table = md.split("## Where the vertices went").nth(1).unwrap().split("\n## ").next().unwrap();
+    assert!(!table.contains("NaN") && !table.contains("head/hands/feet: vertices"), "{table}");
+    assert!(table.contains("| joints: vertices (%) | joints: mean area | other: vertices (%) |"), "{table}");
 }

@@ -2,8 +2,8 @@
 //! in SCAPE's `vertex_part_labels_16.txt`) or JSON (`{"parts": [names], "labels": [ids]}`).
 //!
 //! **One rule for both forms:** the parts are `0..N`, N being the length of the JSON
-//! `parts` list, or for text the parts a `# ids: 0=name, 1=name` comment names (its
-//! largest id + 1), else the largest id + 1; and **every part has at least one vertex**.
+//! `parts` list, or for text the parts a `# ids: 0=name, 1=name` comment or a
+//! `# parts: name0 name1 …` header names (its largest id + 1), else the largest id + 1; and **every part has at least one vertex**.
 //! An empty part — trailing or not, named or not — is refused by both readers with
 //! [`IoError::EmptyPart`], naming it: stage 1 needs at least three non-collinear
 //! vertices per part (checked at ingest against the template), so an empty part could
@@ -114,7 +114,7 @@ fn check_part_ids(
             return Err(bad(
                 k,
                 format!(
-                    "vertex {k} has part id {}, but the '# ids:' comment names parts 0..{} only",
+                    "vertex {k} has part id {}, but the '# ids:' or '# parts:' comment names parts 0..{} only",
                     labels[k],
                     count - 1
                 ),
@@ -140,8 +140,12 @@ fn check_part_ids(
     Ok(used.len())
 }
 
-/// Names from a comment like ` ids: 0=lefthand, 1=leftlowerarm`.
+/// Names from a comment like ` ids: 0=lefthand, 1=leftlowerarm`, or a header like
+/// ` parts: lefthand leftlowerarm` (names by position, separated by whitespace).
 fn parse_names_comment(comment: &str) -> Vec<(u32, String)> {
+    if let Some(list) = comment.trim().strip_prefix("parts:") {
+        return list.split_whitespace().enumerate().map(|(k, name)| (k as u32, name.to_owned())).collect();
+    }
     let Some(list) = comment.trim().strip_prefix("ids:") else { return Vec::new() };
     list.split(',')
         .filter_map(|item| {

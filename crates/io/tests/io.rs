@@ -171,6 +171,24 @@ fn labels_read_from_text_and_json() {
 }
 
 #[test]
+fn text_labels_take_names_from_a_parts_header() {
+    let dir = tempfile::tempdir().unwrap();
+    let txt = dir.path().join("l.txt");
+    std::fs::write(&txt, "# parts: head leftHand  torso\n0\n2\n1\n2\n").unwrap();
+    let labels = desal_io::labels::read_labels(&txt).unwrap();
+    assert_eq!(labels.labels, vec![0, 2, 1, 2]);
+    assert_eq!(labels.names, vec!["head", "leftHand", "torso"]);
+    // The header fixes the part count: an id beyond it names the line.
+    std::fs::write(&txt, "# parts: head hand\n0\n1\n2\n").unwrap();
+    let err = desal_io::labels::read_labels(&txt).unwrap_err().to_string();
+    assert!(err.contains("l.txt:4") && err.contains("part id 2") && err.contains("0..1"), "{err}");
+    // A named part no vertex carries is refused by name.
+    std::fs::write(&txt, "# parts: head hand foot\n0\n1\n1\n").unwrap();
+    let err = desal_io::labels::read_labels(&txt).unwrap_err().to_string();
+    assert!(err.contains("foot"), "{err}");
+}
+
+#[test]
 fn text_labels_with_an_out_of_range_id_name_the_line() {
     let dir = tempfile::tempdir().unwrap();
     let txt = dir.path().join("l.txt");
