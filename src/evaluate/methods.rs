@@ -7,6 +7,7 @@
 //! | `saliency-optimal`, `saliency-subset` | cost × saliency weight | greedy / subset |
 //! | `paper-optimal`, `paper-subset` | cost × saliency × edge length (the paper, Eq. 5) | greedy / subset |
 //! | `multipose` | Mohr & Gleicher 2003: quadrics summed over all poses, no saliency | subset |
+//! | `meshopt`, `meshopt-regularize`, `meshopt-priority` | meshoptimizer in-process (feature `meshopt`, on by default): plain, `Regularize`, the most salient vertices flagged `Priority` (`meshopt.rs`) | subset |
 //! | `external:NAME=PATH` | a simplified template made by another tool | greedy |
 //!
 //! `optimal` placement moves vertices, so they are mapped back by the paper's greedy
@@ -31,6 +32,9 @@ pub enum Method {
     Quadric { cost: Cost, placement: Placement },
     /// Multi-pose QEM (Mohr & Gleicher 2003), subset placement.
     Multipose,
+    /// meshoptimizer, in-process.
+    #[cfg(feature = "meshopt")]
+    Meshopt(super::meshopt::Variant),
     /// Another tool's simplified template, read from `path`.
     External { name: String, path: PathBuf },
 }
@@ -44,6 +48,12 @@ pub const ALL: &[&str] = &[
     "saliency-subset",
     "paper-subset",
     "multipose",
+    #[cfg(feature = "meshopt")]
+    "meshopt",
+    #[cfg(feature = "meshopt")]
+    "meshopt-regularize",
+    #[cfg(feature = "meshopt")]
+    "meshopt-priority",
 ];
 
 /// The reference row of every relative change.
@@ -55,6 +65,8 @@ impl Method {
         match self {
             Method::Quadric { cost, placement } => format!("{}-{}", cost.name(), placement.name()),
             Method::Multipose => "multipose".into(),
+            #[cfg(feature = "meshopt")]
+            Method::Meshopt(variant) => variant.name().into(),
             Method::External { name, .. } => name.clone(),
         }
     }
@@ -75,6 +87,10 @@ impl Method {
         }
         if text == "multipose" {
             return Ok(Method::Multipose);
+        }
+        #[cfg(feature = "meshopt")]
+        if let Some(variant) = super::meshopt::Variant::ALL.into_iter().find(|v| v.name() == text) {
+            return Ok(Method::Meshopt(variant));
         }
         let (cost, placement) = text.split_once('-').with_context(|| unknown(text))?;
         let cost: Cost = cost.parse().map_err(|_| anyhow::anyhow!(unknown(text)))?;
@@ -112,6 +128,8 @@ impl Method {
         match self {
             Method::Quadric { placement, .. } => placement.name(),
             Method::Multipose => "subset",
+            #[cfg(feature = "meshopt")]
+            Method::Meshopt(_) => "subset",
             Method::External { .. } => "external",
         }
     }
@@ -205,6 +223,25 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 .with_context(|| format!("{name}: multi-pose simplification"))?;
             (out.body, Some(out.summary.stop), out.note)
         }
+        #[cfg(feature = "meshopt")]
+        Method::Meshopt(variant) => {
+            let Target::Vertices(n) = target else {
+                bail!("{name}: meshoptimizer is compared at a vertex count; give --target-vertices");
+            };
+            let (body, runs) = super::meshopt::simplify(&template, &inputs.weights, *variant, n);
+            let note = format!(
+                "meshoptimizer {}: {} vertices, {} faces (target {n}; {runs} runs bisecting its index target)",
+                variant.name(),
+                body.positions.len(),
+                body.faces.len()
+            );
+            let stop = if body.positions.len() == n {
+                StopReason::TargetReached
+            } else {
+                StopReason::NoValidCollapse
+            };
+            (body, Some(stop), note)
+        }
         Method::External { path, .. } => {
             let mesh =
                 desal_io::read_mesh(path).with_context(|| format!("{name}: reading {}", path.display()))?;
@@ -281,6 +318,17 @@ mod tests {
         assert!(Method::parse("paper-best").is_err());
         assert!(Method::parse("external:paper-optimal=x.ply").is_err(), "shadows a built-in");
         assert!(Method::parse("external:a b=x.ply").is_err());
+        #[cfg(feature = "meshopt")]
+        {
+            let all = names(&["all"]);
+            assert!(
+                ["meshopt", "meshopt-regularize", "meshopt-priority"]
+                    .iter()
+                    .all(|m| all.contains(&m.to_string()))
+            );
+            assert!(Method::parse("external:meshopt=x.ply").is_err(), "shadows a built-in");
+            assert_eq!(Method::parse("meshopt-priority").unwrap().placement(), "subset");
+        }
     }
 
     /// Vertex 1 is unused and face 2 repeats face 0: both go, the rest is renumbered in

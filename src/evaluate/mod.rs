@@ -20,6 +20,8 @@
 
 pub mod figures;
 pub mod measure;
+#[cfg(feature = "meshopt")]
+pub mod meshopt;
 pub mod methods;
 pub mod regions;
 pub mod report;
