@@ -197,6 +197,16 @@ impl LevelSettings<'_> {
     }
 }
 
+/// The fitted upsampler that held-out measurements (here and in `desal eval`) compare
+/// with COMA's: the dataset's fitted configuration, or the default one when the dataset
+/// has no hierarchy or uses the barycentric upsampler.
+pub fn measured_fitted(params: Option<&HierarchyParams>) -> Result<Upsampler> {
+    Ok(match params.map(HierarchyParams::config).transpose()? {
+        Some(Upsampler::Fitted(c)) => Upsampler::Fitted(c),
+        _ => Upsampler::default(),
+    })
+}
+
 /// Every field of the upsampler configuration, destructured exhaustively.
 fn upsampler_json(up: &Upsampler) -> serde_json::Value {
     match up {
@@ -348,10 +358,7 @@ pub fn compute_level(
 
     let mut chain: Vec<&HierarchyLevelV1> = parents.to_vec();
     chain.push(&body);
-    let fitted = match upsampler {
-        Upsampler::Fitted(c) => Upsampler::Fitted(c),
-        Upsampler::Barycentric => Upsampler::default(),
-    };
+    let fitted = measured_fitted(Some(settings.hierarchy))?;
     let heldout_start = std::time::Instant::now();
     let v2f = if settings.hierarchy.heldout_v2f { V2f::Measure } else { V2f::Skip };
     let [heldout_fitted, heldout_barycentric] =
