@@ -338,6 +338,9 @@ pub struct HierarchyArgs {
     /// term; off by default, as in pipeline files).
     #[arg(long)]
     pub balance: bool,
+    /// Also measure the held-out upsampling error by v2f (slow on large meshes).
+    #[arg(long)]
+    pub heldout_v2f: bool,
     /// Where to write `hierarchy.npz`.
     #[arg(long, short)]
     pub output: PathBuf,
@@ -360,6 +363,7 @@ pub fn hierarchy(args: &HierarchyArgs) -> Result<()> {
         neighbours: args.neighbours,
         ridge: args.ridge,
         neighbourhood: None,
+        heldout_v2f: args.heldout_v2f,
     };
     params.config()?;
     params.check_levels(Some(set.vertex_count()))?;

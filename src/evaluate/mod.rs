@@ -26,6 +26,7 @@ pub mod methods;
 pub mod regions;
 pub mod report;
 pub mod sweep;
+pub mod upsampling;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -127,6 +128,8 @@ struct MethodRun {
     set: SimplifiedSet,
     deformed: Deformed,
     measured: Measured,
+    /// Per evaluated pose: the upsampling errors ([`upsampling`]).
+    upsampling: Vec<upsampling::PoseUpsamplers>,
 }
 
 fn evaluate_dataset(
@@ -157,7 +160,9 @@ fn evaluate_dataset(
     // Checked now, so a bad --figure-poses fails before anything is computed.
     figure_poses(poses, &evaluated, &args.figure_poses)?;
 
-    // Step 2: simplify, map and deform, one method at a time (each runs in parallel).
+    // Step 2: simplify, map and deform, one method at a time (each runs in parallel);
+    // then the upsampling error of the simplified mesh and of its deformations.
+    let fitted = crate::stages::hierarchy::measured_fitted(dataset.spec.hierarchy.as_ref())?;
     let mut prepared = Vec::new();
     for method in methods {
         let set = methods::simplify_and_map(method, &inputs, target)?;
@@ -170,25 +175,42 @@ fn evaluate_dataset(
             method.name(),
             deformed.models.len()
         ));
-        prepared.push((method.clone(), set, deformed));
+        let up_started = Instant::now();
+        let up = upsampling::measure(poses, &set, &deformed, &folds, &evaluated, &fitted)
+            .with_context(|| format!("{}: upsampling error", method.name()))?;
+        log(&format!(
+            "{}: upsampled to full resolution, barycentric and fitted U per fold ({:.2} s)",
+            method.name(),
+            up_started.elapsed().as_secs_f64()
+        ));
+        prepared.push((method.clone(), set, deformed, up));
     }
 
     // Step 3: every deformed pose against both ground truths.
     let measure_started = Instant::now();
-    let runs: Vec<Run> =
-        prepared.iter().map(|(_, set, deformed)| Run { simplified: &set.mapped.poses, deformed }).collect();
+    let runs: Vec<Run> = prepared
+        .iter()
+        .map(|(_, set, deformed, _)| Run { simplified: &set.mapped.poses, deformed })
+        .collect();
     let measured = measure::measure(poses, &evaluated, &runs);
     let measure_seconds = measure_started.elapsed().as_secs_f64();
     log(&format!("measured {} poses x {} methods ({measure_seconds:.2} s)", evaluated.len(), prepared.len()));
     let runs: Vec<MethodRun> = prepared
         .into_iter()
         .zip(measured)
-        .map(|((method, set, deformed), measured)| MethodRun { method, set, deformed, measured })
+        .map(|((method, set, deformed, upsampling), measured)| MethodRun {
+            method,
+            set,
+            deformed,
+            measured,
+            upsampling,
+        })
         .collect();
 
     // Step 4: reports, figures, meshes, sweep — into a temporary folder first.
     let regions = regions::Regions::new(&poses.template_mesh(), &inputs.labels);
-    let mut report = build_report(pipeline, dataset, &inputs, target, &folds, &evaluated, &runs, &regions);
+    let mut report =
+        build_report(pipeline, dataset, &inputs, target, &folds, &evaluated, &runs, &regions, &fitted);
     report.measure_seconds = measure_seconds;
     let eval_dir = dataset.out_dir.join("eval");
     desal_io::replace_dir(&eval_dir, &[], |dir| -> Result<()> {
@@ -234,10 +256,11 @@ fn build_report(
     evaluated: &[usize],
     runs: &[MethodRun],
     regions: &regions::Regions,
+    fitted: &desal_hierarchy::Upsampler,
 ) -> EvalReport {
     let poses = &inputs.poses;
     let mut methods: Vec<MethodReport> =
-        runs.iter().map(|run| method_report(poses, evaluated, run, regions)).collect();
+        runs.iter().map(|run| method_report(poses, evaluated, run, regions, fitted)).collect();
     let baseline = methods.iter().position(|m| m.name == BASELINE);
     if let Some(b) = baseline {
         let base_poses = methods[b].poses.clone();
@@ -284,6 +307,7 @@ fn method_report(
     evaluated: &[usize],
     run: &MethodRun,
     regions: &regions::Regions,
+    fitted: &desal_hierarchy::Upsampler,
 ) -> MethodReport {
     let set = &run.set.mapped;
     let template = set.poses.template_mesh();
@@ -296,6 +320,7 @@ fn method_report(
             fold: run.deformed.fold_of_pose[pose].expect("every evaluated pose is in a fold"),
             in_sample: run.measured.in_sample[k],
             held_out: run.measured.held_out[k],
+            upsampling: run.upsampling[k],
         })
         .collect();
     let in_sample = &run.deformed.models[0];
@@ -319,6 +344,7 @@ fn method_report(
         face_area: MeanStd::of((0..template.face_count()).map(|f| template.face_area(f))),
         regions: regions.stats(&template, &set.labels),
         summary: report::summarise(&run.measured.in_sample, &run.measured.held_out),
+        upsampling: upsampling::summarise(&run.upsampling, fitted),
         versus_baseline: None,
         poses: records,
         models: run.deformed.models.clone(),

@@ -8,6 +8,7 @@ use serde::Serialize;
 
 use super::measure::{Errors, MeanStd, ModelRun, PoseErrors};
 use super::regions::RegionStats;
+use super::upsampling::{PoseUpsamplers, UpsamplingReport};
 
 /// The paper's Table 1 (SCAPE, 2500 vertices; v2f, v2v in m²).
 pub const PAPER_TABLE: [(&str, f64, f64); 3] =
@@ -74,6 +75,9 @@ pub struct MethodReport {
     pub face_area: MeanStd,
     pub regions: Vec<RegionStats>,
     pub summary: Summary,
+    /// Held out, per fold: the simplified mesh upsampled to full resolution by COMA's
+    /// barycentric U and the fitted U, from the ground truth and from the deformation.
+    pub upsampling: UpsamplingReport,
     /// Against the baseline (absent for the baseline itself or when it was not run).
     pub versus_baseline: Option<Versus>,
     pub poses: Vec<PoseRecord>,
@@ -149,6 +153,7 @@ pub struct PoseRecord {
     pub fold: usize,
     pub in_sample: PoseErrors,
     pub held_out: PoseErrors,
+    pub upsampling: PoseUpsamplers,
 }
 
 /// Wall times, seconds.
@@ -249,6 +254,7 @@ pub fn markdown(report: &EvalReport, figures: &[String]) -> String {
     ] {
         error_table(&mut md, report, title, split, full);
     }
+    upsampling_table(&mut md, report);
     paper_comparison(&mut md, report);
     region_table(&mut md, report);
     cost_table(&mut md, report);
@@ -308,6 +314,47 @@ fn error_table(md: &mut String, report: &EvalReport, title: &str, held_out: bool
             sci(figures.v2f.std),
             sci(figures.v2v.mean),
             sci(figures.v2v.std),
+        );
+    }
+    let _ = writeln!(md);
+}
+
+/// The upsampling error of every method (issue 13), beside the deformation tables.
+fn upsampling_table(md: &mut String, report: &EvalReport) {
+    let _ = writeln!(md, "## Held-out, upsampled to full resolution\n");
+    let _ = writeln!(
+        md,
+        "Each method's simplified mesh as one level of a mesh-network hierarchy (`hierarchy.npz`'s `U`): per \
+         fold, U is built on the fold's training poses only — COMA's barycentric U (template pose) and the \
+         fitted U — and brings the fold's test poses back to full resolution, compared with the full-resolution \
+         pose (m², mean ± sd over the {} poses). **Ground truth**: U · (the pose at the method's vertices), the \
+         upsampling error, free of any pose model. **Deformed**: U · (the held-out deformed simplified mesh \
+         above), how these networks use a hierarchy. MSE is the mean squared vertex distance; v2f is Eq. 6 \
+         between the upsampled and the full mesh. Fitted / bary. is the ratio of the ground-truth MSEs.\n",
+        report.evaluated_poses.len()
+    );
+    let _ = writeln!(
+        md,
+        "| method | vertices | ground truth MSE: bary. | fitted | fitted / bary. | ground truth v2f: bary. | fitted | deformed MSE: bary. | fitted | deformed v2f: bary. | fitted |"
+    );
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
+    let cell = |m: &MeanStd| format!("{} ± {}", sci(m.mean), sci(m.std));
+    for m in &report.methods {
+        let (b, f) = (&m.upsampling.barycentric, &m.upsampling.fitted_summary);
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {:.3} | {} | {} | {} | {} | {} | {} |",
+            m.name,
+            m.vertices,
+            cell(&b.ground_truth_mse),
+            cell(&f.ground_truth_mse),
+            m.upsampling.ground_truth_mse_ratio,
+            cell(&b.ground_truth_v2f),
+            cell(&f.ground_truth_v2f),
+            cell(&b.deformed_mse),
+            cell(&f.deformed_mse),
+            cell(&b.deformed_v2f),
+            cell(&f.deformed_v2f),
         );
     }
     let _ = writeln!(md);
@@ -481,7 +528,14 @@ mod tests {
     fn pose(k: usize, v2v: f64) -> PoseRecord {
         let e = Errors { v2f: v2v / 2.0, v2v, v2f_deformed_to_target: 0.0, v2f_target_to_deformed: 0.0 };
         let both = PoseErrors { vs_simplified: e, vs_full: e };
-        PoseRecord { pose: k, name: format!("p{k}"), fold: 0, in_sample: both, held_out: both }
+        PoseRecord {
+            pose: k,
+            name: format!("p{k}"),
+            fold: 0,
+            in_sample: both,
+            held_out: both,
+            upsampling: Default::default(),
+        }
     }
 
     #[test]

@@ -15,8 +15,8 @@
 
 use anyhow::{Result, bail};
 use desal_hierarchy::{
-    CsrMatrix, FittedConfig, LevelInput, Neighbourhood, Upsampler, adjacency, build_level, nest, selection,
-    upsampling_error,
+    ChainLevel, Coarse, CsrMatrix, FittedConfig, LevelInput, Neighbourhood, Upsampled, Upsampler, V2f,
+    adjacency, build_level, composed_upsamplers, level_poses, nest, selection, upsampling_errors,
 };
 use desal_io::artifact::{ArtifactKind, ContentHash, HierarchyLevelV1};
 use desal_io::npz::{CooArrays, HierarchyArrays};
@@ -71,6 +71,10 @@ pub struct HierarchyParams {
     /// Fitted only: `euclidean` (default) or `geodesic` candidates.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub neighbourhood: Option<NeighbourhoodName>,
+    /// Also measure the held-out upsampling error by v2f (default false: its surface
+    /// queries take seconds per level on SCAPE; `desal eval` always measures it).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub heldout_v2f: bool,
 }
 
 impl HierarchyParams {
@@ -177,11 +181,13 @@ impl LevelSettings<'_> {
                 "neighbours": self.hierarchy.neighbours,
                 "ridge": self.hierarchy.ridge,
                 "neighbourhood": self.hierarchy.neighbourhood,
+                "heldout_v2f": self.hierarchy.heldout_v2f,
             })),
             resolved: canonical_json(&json!({
                 "level": step + 1,
                 "upsampler": upsampler_json(&self.hierarchy.config()?),
                 "heldout_folds": HELDOUT_FOLDS,
+                "heldout_v2f": self.hierarchy.heldout_v2f,
                 "fit": fit.resolved,
                 "saliency": saliency.resolved,
                 "simplify": simplify.resolved,
@@ -189,6 +195,16 @@ impl LevelSettings<'_> {
             inputs,
         })
     }
+}
+
+/// The fitted upsampler that held-out measurements (here and in `desal eval`) compare
+/// with COMA's: the dataset's fitted configuration, or the default one when the dataset
+/// has no hierarchy or uses the barycentric upsampler.
+pub fn measured_fitted(params: Option<&HierarchyParams>) -> Result<Upsampler> {
+    Ok(match params.map(HierarchyParams::config).transpose()? {
+        Some(Upsampler::Fitted(c)) => Upsampler::Fitted(c),
+        _ => Upsampler::default(),
+    })
 }
 
 /// Every field of the upsampler configuration, destructured exhaustively.
@@ -211,9 +227,9 @@ fn upsampler_json(up: &Upsampler) -> serde_json::Value {
 /// Held-out upsampling error of one upsampler, composed to full resolution, m².
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct HeldOutError {
-    /// Means over every measured pose.
+    /// Means over every measured pose (`v2f`: `None` unless `heldout_v2f`).
     pub mse: f64,
-    pub v2f: f64,
+    pub v2f: Option<f64>,
     pub folds: Vec<FoldError>,
 }
 
@@ -224,7 +240,7 @@ pub struct FoldError {
     pub training_poses: usize,
     pub measured_poses: usize,
     pub mse: f64,
-    pub v2f: f64,
+    pub v2f: Option<f64>,
 }
 
 /// `hierarchy.json`'s entry for one level step k → k+1 (the stage's summary).
@@ -249,6 +265,9 @@ pub struct LevelSummary {
     pub seconds: f64,
     /// Of which building D, U and A.
     pub matrices_seconds: f64,
+    /// Wall time of the held-out measurement (every fold's U refitted, both upsamplers
+    /// measured), seconds.
+    pub heldout_seconds: f64,
     /// Held out, composed to full resolution: the fitted U (the dataset's fitted
     /// configuration, or the default one when the dataset uses barycentric) and COMA's.
     pub heldout_fitted: HeldOutError,
@@ -265,13 +284,7 @@ fn level_pose_set(
     parent: Option<&HierarchyLevelV1>,
 ) -> Result<(PoseSet, PartLabels)> {
     let Some(p) = parent else { return Ok((full.clone(), labels.clone())) };
-    let gather = |v: &[desal_mesh::Vec3]| p.coarse_to_orig.iter().map(|&o| v[o as usize]).collect();
-    let set = PoseSet::try_new(
-        full.names.clone(),
-        full.poses.iter().map(|v| gather(v)).collect(),
-        p.faces.clone(),
-        full.template,
-    )?;
+    let set = level_poses(full, &p.coarse_to_orig, &p.faces)?;
     let labels = PartLabels {
         labels: p.coarse_to_orig.iter().map(|&o| labels.labels[o as usize]).collect(),
         names: labels.names.clone(),
@@ -345,12 +358,11 @@ pub fn compute_level(
 
     let mut chain: Vec<&HierarchyLevelV1> = parents.to_vec();
     chain.push(&body);
-    let fitted = match upsampler {
-        Upsampler::Fitted(c) => Upsampler::Fitted(c),
-        Upsampler::Barycentric => Upsampler::default(),
-    };
-    let heldout_fitted = heldout(full, labels, &chain, &fitted, settings.saliency)?;
-    let heldout_barycentric = heldout(full, labels, &chain, &Upsampler::Barycentric, settings.saliency)?;
+    let fitted = measured_fitted(Some(settings.hierarchy))?;
+    let heldout_start = std::time::Instant::now();
+    let v2f = if settings.hierarchy.heldout_v2f { V2f::Measure } else { V2f::Skip };
+    let [heldout_fitted, heldout_barycentric] =
+        heldout(full, &chain, [&fitted, &Upsampler::Barycentric], settings.saliency, v2f)?;
     let r = &level.report;
     let summary = LevelSummary {
         level: step + 1,
@@ -366,12 +378,13 @@ pub fn compute_level(
         up_max_row_sum_error: r.up_max_row_sum_error,
         seconds,
         matrices_seconds: r.seconds,
+        heldout_seconds: heldout_start.elapsed().as_secs_f64(),
         heldout_mse_ratio: heldout_fitted.mse / heldout_barycentric.mse,
         heldout_fitted,
         heldout_barycentric,
     };
     let note = format!(
-        "level {}: {} -> {} vertices, {} U ({} nnz), held-out MSE fitted {:.3e} / barycentric {:.3e} m² = {:.3}, {:.2} s",
+        "level {}: {} -> {} vertices, {} U ({} nnz), held-out MSE fitted {:.3e} / barycentric {:.3e} m² = {:.3}, {:.2} s (+ {:.2} s held out)",
         summary.level,
         summary.fine_vertices,
         summary.vertices,
@@ -380,61 +393,79 @@ pub fn compute_level(
         summary.heldout_fitted.mse,
         summary.heldout_barycentric.mse,
         summary.heldout_mse_ratio,
-        seconds
+        seconds,
+        summary.heldout_seconds
     );
     Ok(StageOutput { body, summary, note })
 }
 
-/// The held-out upsampling error of the last level of `chain` with `upsampler`, composed
-/// to full resolution: per fold, every level's U refitted on that fold's training poses.
-fn heldout(
+/// The held-out upsampling error of the last level of `chain` with each of `upsamplers`,
+/// composed to full resolution: per fold ([`HELDOUT_FOLDS`], by pose index), every
+/// level's U refitted on that fold's training poses, all upsamplers measured on the
+/// fold's poses in one pass. A barycentric chain does not depend on the training poses
+/// (template only), so it is built once for every fold.
+fn heldout<const N: usize>(
     full: &PoseSet,
-    labels: &PartLabels,
     chain: &[&HierarchyLevelV1],
-    upsampler: &Upsampler,
+    upsamplers: [&Upsampler; N],
     saliency: &SaliencyParams,
-) -> Result<HeldOutError> {
+    v2f: V2f,
+) -> Result<[HeldOutError; N]> {
     let all = training_mask(full, saliency);
-    let mut folds = Vec::new();
-    let (mut mse_sum, mut v2f_sum, mut measured_total) = (0.0, 0.0, 0usize);
+    let levels: Vec<ChainLevel> = chain
+        .iter()
+        .map(|l| ChainLevel { coarse_to_fine: &l.coarse_to_fine, coarse_faces: &l.faces })
+        .collect();
+    let last = chain.last().expect("non-empty chain");
+    let composed = |mask: &[bool], up: &Upsampler| -> Result<CsrMatrix> {
+        Ok(composed_upsamplers(full, &levels, mask, up)?.pop().expect("one per level"))
+    };
+    let mut fold_independent: [Option<CsrMatrix>; N] = std::array::from_fn(|_| None);
+    for (k, up) in upsamplers.iter().enumerate() {
+        if matches!(up, Upsampler::Barycentric) {
+            fold_independent[k] = Some(composed(&all, up)?);
+        }
+    }
+    let mut folds: [Vec<FoldError>; N] = std::array::from_fn(|_| Vec::new());
     for fold in 0..HELDOUT_FOLDS {
         let mask: Vec<bool> = (0..full.pose_count()).map(|p| all[p] && p % HELDOUT_FOLDS != fold).collect();
         let measured: Vec<usize> = (0..full.pose_count()).filter(|p| p % HELDOUT_FOLDS == fold).collect();
         if measured.is_empty() {
             continue;
         }
-        let mut composed: Option<CsrMatrix> = None;
-        for (k, level) in chain.iter().enumerate() {
-            let parent = k.checked_sub(1).map(|j| chain[j]);
-            let (fine, _) = level_pose_set(full, labels, parent)?;
-            let input = LevelInput {
-                fine: &fine,
-                coarse_to_fine: &level.coarse_to_fine,
-                coarse_faces: &level.faces,
-                training: &mask,
-            };
-            let up = build_level(&input, upsampler)?.up;
-            composed = Some(match composed {
-                None => up,
-                Some(c) => c.mul(&up)?,
+        let refitted: Vec<Option<CsrMatrix>> = upsamplers
+            .iter()
+            .zip(&fold_independent)
+            .map(|(up, fixed)| if fixed.is_some() { Ok(None) } else { composed(&mask, up).map(Some) })
+            .collect::<Result<_>>()?;
+        let candidates: Vec<Upsampled> = refitted
+            .iter()
+            .zip(&fold_independent)
+            .map(|(refit, fixed)| Upsampled {
+                up_to_full: refit.as_ref().or(fixed.as_ref()).expect("one of the two"),
+                coarse: Coarse::GroundTruth(&last.coarse_to_orig),
+            })
+            .collect();
+        let errors = upsampling_errors(full, &measured, &candidates, v2f)?;
+        for (k, e) in errors.iter().enumerate() {
+            folds[k].push(FoldError {
+                fold,
+                training_poses: mask.iter().filter(|&&m| m).count(),
+                measured_poses: measured.len(),
+                mse: e.mse,
+                v2f: e.v2f,
             });
         }
-        let composed = composed.expect("a chain has at least one level");
-        let last = chain.last().expect("non-empty chain");
-        let e = upsampling_error(full, &composed, &last.coarse_to_orig, &measured)?;
-        mse_sum += e.mse * measured.len() as f64;
-        v2f_sum += e.v2f * measured.len() as f64;
-        measured_total += measured.len();
-        folds.push(FoldError {
-            fold,
-            training_poses: mask.iter().filter(|&&m| m).count(),
-            measured_poses: measured.len(),
-            mse: e.mse,
-            v2f: e.v2f,
-        });
     }
-    let n = measured_total.max(1) as f64;
-    Ok(HeldOutError { mse: mse_sum / n, v2f: v2f_sum / n, folds })
+    Ok(folds.map(|folds| {
+        let n = folds.iter().map(|f| f.measured_poses).sum::<usize>().max(1) as f64;
+        let weighted = |x: f64, f: &FoldError| x * f.measured_poses as f64;
+        HeldOutError {
+            mse: folds.iter().map(|f| weighted(f.mse, f)).sum::<f64>() / n,
+            v2f: folds.iter().map(|f| f.v2f.map(|v| weighted(v, f))).sum::<Option<f64>>().map(|v| v / n),
+            folds,
+        }
+    }))
 }
 
 /// `hierarchy.json`: the level counts and every level step's summary.
@@ -505,6 +536,7 @@ mod tests {
             neighbours: None,
             ridge: None,
             neighbourhood: None,
+            heldout_v2f: false,
         }
     }
 
@@ -546,6 +578,7 @@ mod tests {
         );
         assert_ne!(base, key(&HierarchyParams { upsampler: UpsamplerName::Barycentric, ..params(vec![10]) }));
         assert_ne!(base, key(&params(vec![11])));
+        assert_ne!(base, key(&HierarchyParams { heldout_v2f: true, ..params(vec![10]) }));
         // Level 1's key does not depend on later levels.
         assert_eq!(base, key(&params(vec![10, 5])));
     }

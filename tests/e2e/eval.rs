@@ -78,9 +78,9 @@ fn every_requested_method_is_reported_and_the_saved_meshes_reproduce_the_figures
         report["methods"].as_array().unwrap().iter().map(|m| m["name"].as_str().unwrap()).collect();
     assert_eq!(names, methods);
     for name in methods {
-        // One row per method in each of the four error tables, and in the region and
-        // cost tables.
-        assert_eq!(md.matches(&format!("| {name} | {SAMPLE_TARGET} |")).count(), 5, "{name} rows in eval.md");
+        // One row per method in each of the four error tables, the upsampling table,
+        // and the region and cost tables.
+        assert_eq!(md.matches(&format!("| {name} | {SAMPLE_TARGET} |")).count(), 6, "{name} rows in eval.md");
         assert!(eval_dir.join(format!("face-area/{name}.png")).is_file());
         assert!(eval_dir.join(format!("errors/{name}-rms.png")).is_file());
         assert_eq!(method(&report, name)["vertices"], SAMPLE_TARGET);
@@ -245,6 +245,47 @@ fn another_tools_mesh_is_mapped_like_desals_own_optimal_output() {
     assert!(report["baseline"].is_null(), "qslim-optimal was not run");
     let md = std::fs::read_to_string(dir.path().join("out/sample/eval/eval.md")).unwrap();
     assert!(md.contains("| mine | 800 |"));
+}
+
+/// Issue 13, the upsampling columns, on a case with a known answer: the full template
+/// handed in as a method's "simplified" mesh maps every vertex onto itself, so COMA's
+/// barycentric U is the identity and the fitted U (least squares over poses, ridge
+/// toward that identity row) is too. Upsampling the ground truth then gives exactly 0
+/// with the barycentric U and rounding with the fitted one; upsampling the deformation
+/// gives the deformation itself, whose v2f against the full pose the deformation table
+/// already holds; a real simplification gives errors above 0 and a fitted U below
+/// COMA's.
+#[test]
+fn upsampling_columns_vanish_for_a_method_that_keeps_every_vertex() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = sample_pipeline(dir.path(), &data_samples().join("poses"), SAMPLE_TARGET);
+    let template = data_samples().join("poses/00_rest.ply");
+    let methods = format!("qslim-subset,external:full={}", template.display());
+    let report = eval_ok(&pipeline, &methods, &[]);
+    let full = method(&report, "full");
+    assert_eq!(full["vertices"], report["original_vertices"], "every vertex kept");
+    for record in full["poses"].as_array().unwrap() {
+        let (bary, fitted) = (&record["upsampling"]["barycentric"], &record["upsampling"]["fitted"]);
+        assert_eq!(f(&bary["ground_truth"]["mse"]), 0.0, "identity U: {record}");
+        assert_eq!(f(&bary["ground_truth"]["v2f"]), 0.0);
+        assert!(
+            f(&fitted["ground_truth"]["mse"]) < 1e-16,
+            "fitted U is the identity up to rounding: {record}"
+        );
+        assert_eq!(
+            f(&bary["deformed"]["v2f"]),
+            f(&record["held_out"]["vs_full"]["v2f"]),
+            "identity U: the deformation upsampled is the deformation"
+        );
+    }
+    let simplified = &method(&report, "qslim-subset")["upsampling"];
+    let (bary, fitted) = (&simplified["barycentric"], &simplified["fitted_summary"]);
+    assert!(f(&bary["ground_truth_mse"]["mean"]) > 0.0);
+    assert!(f(&fitted["ground_truth_mse"]["mean"]) < f(&bary["ground_truth_mse"]["mean"]), "{simplified}");
+    assert!(f(&bary["deformed_v2f"]["mean"]) > f(&bary["ground_truth_v2f"]["mean"]), "the model adds error");
+    let md = std::fs::read_to_string(dir.path().join("out/sample/eval/eval.md")).unwrap();
+    assert!(md.contains("## Held-out, upsampled to full resolution"));
+    assert!(md.contains("| full | "), "{md}");
 }
 
 #[test]

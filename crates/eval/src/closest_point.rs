@@ -30,8 +30,10 @@ pub fn closest_point_on_triangle(p: &Vec3, a: &Vec3, b: &Vec3, c: &Vec3) -> Vec3
 
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return a + ab * v; // edge region AB
+        if d1 - d3 <= 0.0 {
+            return closest_point_on_segments(p, a, b, c); // AB collapsed to a point
+        }
+        return a + ab * (d1 / (d1 - d3)); // edge region AB
     }
 
     let cp = p - c;
@@ -43,14 +45,19 @@ pub fn closest_point_on_triangle(p: &Vec3, a: &Vec3, b: &Vec3, c: &Vec3) -> Vec3
 
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return a + ac * w; // edge region AC
+        if d2 - d6 <= 0.0 {
+            return closest_point_on_segments(p, a, b, c); // AC collapsed to a point
+        }
+        return a + ac * (d2 / (d2 - d6)); // edge region AC
     }
 
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return b + (c - b) * w; // edge region BC
+        let denominator = (d4 - d3) + (d5 - d6);
+        if denominator <= 0.0 {
+            return closest_point_on_segments(p, a, b, c); // BC collapsed to a point
+        }
+        return b + (c - b) * ((d4 - d3) / denominator); // edge region BC
     }
 
     let sum = va + vb + vc;
@@ -96,6 +103,20 @@ mod tests {
 
     fn v(x: f64, y: f64, z: f64) -> Vec3 {
         Vec3::new(x, y, z)
+    }
+
+    /// Two coincident corners (a zero-length edge) must not give 0 / 0: the triangle is
+    /// the segment from the double corner to the third, and each query point's distance
+    /// to it is known. (Found by `desal eval`'s upsampling error, issue 13.)
+    #[test]
+    fn coincident_corners_give_the_distance_to_the_remaining_segment() {
+        let (a, c) = (v(0.0, 0.0, 0.0), v(0.0, 1.0, 0.0));
+        for (p, want) in [(v(0.0, 0.5, 1.0), 1.0), (v(2.0, 0.5, 0.0), 4.0), (v(0.0, -1.0, 0.0), 1.0)] {
+            for (x, y, z) in [(a, a, c), (a, c, a), (c, a, a)] {
+                let d = point_triangle_distance_sq(&p, &x, &y, &z);
+                assert_eq!(d, want, "{p:?} against {x:?} {y:?} {z:?}");
+            }
+        }
     }
 
     /// The unit right triangle in the z = 0 plane, queried from each Voronoi region: the

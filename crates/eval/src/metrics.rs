@@ -111,7 +111,13 @@ pub fn v2f(a: &TriMesh, b: &TriMesh) -> Real {
 
 /// Both halves of [`v2f`] separately (each a mean over its own vertices).
 pub fn v2f_halves(a: &TriMesh, b: &TriMesh) -> V2fHalves {
-    let a_to_b = SurfaceIndex::new(b).distances_sq(&a.positions);
+    v2f_halves_indexed(a, b, &SurfaceIndex::new(b))
+}
+
+/// [`v2f_halves`] with `b`'s surface index built by the caller, for a `b` measured
+/// against many meshes (`b_surface` must index `b`).
+pub fn v2f_halves_indexed(a: &TriMesh, b: &TriMesh, b_surface: &SurfaceIndex) -> V2fHalves {
+    let a_to_b = b_surface.distances_sq(&a.positions);
     let b_to_a = SurfaceIndex::new(a).distances_sq(&b.positions);
     V2fHalves {
         a_to_b: mean(&a_to_b),

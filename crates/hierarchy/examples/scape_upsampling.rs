@@ -79,15 +79,16 @@ fn main() {
                 upsampling_error(&full, &composed(&levels, 0), &geometry[0].orig, &odd).expect("measure");
             let e2 =
                 upsampling_error(&full, &composed(&levels, 1), &geometry[1].orig, &odd).expect("measure");
+            let (v1, v2) = (e1.v2f.expect("measured"), e2.v2f.expect("measured"));
             println!(
                 "{:<34} {:>10.3} {:>10.3} {:>12.3} {:>12.3}",
                 format!("{name} / {}", up.name()),
                 e1.mse * 1e6,
-                e1.v2f * 1e6,
+                v1 * 1e6,
                 e2.mse * 1e6,
-                e2.v2f * 1e6
+                v2 * 1e6
             );
-            rows.push((name, up.name(), e1.mse, e2.mse, e1.v2f, e2.v2f));
+            rows.push((name, up.name(), e1.mse, e2.mse, v1, v2));
         }
     }
     let find = |n: &str, u: &str| rows.iter().find(|r| r.0 == n && r.1 == u).expect("row");

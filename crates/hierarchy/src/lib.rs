@@ -12,6 +12,8 @@
 //!   poses, affine (sum to 1), ridge toward the barycentric row.
 //! - [`upsampling_error`] ([`measure`]): the composed U applied to the level-k ground
 //!   truth against the full-resolution pose, mean squared vertex distance and v2f, m².
+//! - [`composed_upsamplers`] ([`chain`]): every level's U of a chain refitted on a subset
+//!   of poses and composed to full resolution, for held-out measurement.
 //! - [`CsrMatrix`] ([`sparse`]): the matrices, with a row-major COO export.
 //!
 //! Index spaces: `fine_idx` / `coarse_idx` within one step; `orig_idx` for level 0.
@@ -56,6 +58,7 @@
 //! whatever the thread count.
 
 pub mod barycentric;
+pub mod chain;
 pub mod error;
 pub mod fitted;
 mod geodesic;
@@ -69,8 +72,11 @@ pub mod sparse;
 /// cache keys the hierarchy stage on it.
 pub const VERSION: u32 = 1;
 
+pub use chain::{ChainLevel, composed_upsamplers, level_poses};
 pub use error::HierarchyError;
 pub use fitted::{DEFAULT_NEIGHBOURS, DEFAULT_RIDGE, FitCounts, FittedConfig, Neighbourhood};
 pub use level::{Level, LevelInput, LevelReport, Upsampler, adjacency, build_level, nest, selection};
-pub use measure::{PoseError, UpsamplingError, upsampling_error, upsampling_mse};
+pub use measure::{
+    Coarse, PoseError, Upsampled, UpsamplingError, V2f, upsampling_error, upsampling_errors, upsampling_mse,
+};
 pub use sparse::{Coo, CsrMatrix};

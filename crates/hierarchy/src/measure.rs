@@ -8,7 +8,7 @@
 //! the full faces against the full mesh), both in squared input units (m² for SCAPE).
 //! Measure on poses the upsampler was not fitted on to report it held out.
 
-use desal_eval::{metrics::mean, v2f};
+use desal_eval::{SurfaceIndex, metrics::mean, v2f_halves_indexed};
 use desal_mesh::{PoseSet, Real, TriMesh, Vec3};
 use rayon::prelude::*;
 
@@ -21,8 +21,9 @@ pub struct PoseError {
     pub pose: usize,
     /// Mean over full-resolution vertices of `‖(U c)_i − x_i‖²`.
     pub mse: Real,
-    /// Symmetric v2f between the upsampled and the full mesh.
-    pub v2f: Real,
+    /// Symmetric v2f between the upsampled and the full mesh; `None` when skipped
+    /// ([`V2f::Skip`]).
+    pub v2f: Option<Real>,
 }
 
 /// The upsampling error over a set of poses.
@@ -30,12 +31,39 @@ pub struct PoseError {
 pub struct UpsamplingError {
     /// Per measured pose, in the order given.
     pub per_pose: Vec<PoseError>,
-    /// Means over the measured poses, m².
+    /// Means over the measured poses, m² (`v2f`: `None` when skipped).
     pub mse: Real,
-    pub v2f: Real,
+    pub v2f: Option<Real>,
     /// Per full-resolution vertex (`orig_idx`), the squared distance averaged over the
     /// measured poses, m²: the per-vertex error map.
     pub vertex_mse: Vec<Real>,
+}
+
+/// What one upsampled mesh starts from, per measured pose.
+#[derive(Debug, Clone, Copy)]
+pub enum Coarse<'a> {
+    /// The level-k ground truth: the full-resolution pose at `orig{k}` (`coarse_to_orig`,
+    /// length `n_k`). This is the upsampling error proper.
+    GroundTruth(&'a [u32]),
+    /// Level-k positions given per measured pose (`[k]` for `poses[k]`, each of length
+    /// `n_k`), e.g. a pose model's deformation of the coarse mesh.
+    Given(&'a [Vec<Vec3>]),
+}
+
+/// Whether [`upsampling_errors`] measures v2f: its surface queries are most of the cost
+/// (about 35 ms per SCAPE pose and candidate, against well under 1 ms for the MSE).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum V2f {
+    Measure,
+    Skip,
+}
+
+/// One candidate of [`upsampling_errors`]: a composed upsampler (`n_0 × n_k`) and what it
+/// upsamples.
+#[derive(Debug, Clone, Copy)]
+pub struct Upsampled<'a> {
+    pub up_to_full: &'a CsrMatrix,
+    pub coarse: Coarse<'a>,
 }
 
 /// Measures `up_to_full` (`n_0 × n_k`, the composed upsampler of level k) on `poses` of
@@ -50,32 +78,65 @@ pub fn upsampling_error(
     coarse_to_orig: &[u32],
     poses: &[usize],
 ) -> Result<UpsamplingError, HierarchyError> {
-    check_shapes(full, up_to_full, coarse_to_orig, poses)?;
+    let candidate = Upsampled { up_to_full, coarse: Coarse::GroundTruth(coarse_to_orig) };
+    Ok(upsampling_errors(full, poses, &[candidate], V2f::Measure)?.remove(0))
+}
+
+/// [`upsampling_error`] of several candidates on the same `poses`, one result per
+/// candidate in order, with or without v2f: each full-resolution pose's surface index is
+/// built once and shared by every candidate.
+///
+/// Errors: as [`upsampling_error`], and a [`Coarse::Given`] with other than one position
+/// set of `n_k` points per measured pose.
+pub fn upsampling_errors(
+    full: &PoseSet,
+    poses: &[usize],
+    candidates: &[Upsampled],
+    v2f: V2f,
+) -> Result<Vec<UpsamplingError>, HierarchyError> {
+    for c in candidates {
+        check_candidate(full, c, poses)?;
+    }
     let n0 = full.vertex_count();
-    let measured: Vec<(PoseError, Vec<Real>)> = poses
+    // Per pose, per candidate: the pose's error and its per-vertex squared distances.
+    let measured: Vec<Vec<(PoseError, Vec<Real>)>> = poses
         .par_iter()
-        .map(|&pose| {
-            let up = upsample_pose(full, up_to_full, coarse_to_orig, pose);
-            let squared = squared_errors(&up, &full.poses[pose]);
-            let up_mesh = TriMesh { positions: up, faces: full.faces.clone() };
-            let v2f = v2f(&up_mesh, &full.pose_mesh(pose));
-            (PoseError { pose, mse: mean(&squared), v2f }, squared)
+        .enumerate()
+        .map(|(slot, &pose)| {
+            let truth = full.pose_mesh(pose);
+            let truth_surface = (v2f == V2f::Measure).then(|| SurfaceIndex::new(&truth));
+            candidates
+                .iter()
+                .map(|c| {
+                    let up = upsample_pose(full, c, slot, pose);
+                    let squared = squared_errors(&up, &full.poses[pose]);
+                    let v2f = truth_surface.as_ref().map(|surface| {
+                        let up_mesh = TriMesh { positions: up, faces: full.faces.clone() };
+                        v2f_halves_indexed(&up_mesh, &truth, surface).combined()
+                    });
+                    (PoseError { pose, mse: mean(&squared), v2f }, squared)
+                })
+                .collect()
         })
         .collect();
 
-    let mut vertex_mse = vec![0.0; n0];
-    for (_, squared) in &measured {
-        for (acc, s) in vertex_mse.iter_mut().zip(squared) {
-            *acc += s;
-        }
-    }
-    for v in &mut vertex_mse {
-        *v /= measured.len().max(1) as Real;
-    }
-    let per_pose: Vec<PoseError> = measured.into_iter().map(|(e, _)| e).collect();
-    let mse = mean(&per_pose.iter().map(|e| e.mse).collect::<Vec<_>>());
-    let v2f = mean(&per_pose.iter().map(|e| e.v2f).collect::<Vec<_>>());
-    Ok(UpsamplingError { per_pose, mse, v2f, vertex_mse })
+    Ok((0..candidates.len())
+        .map(|c| {
+            let mut vertex_mse = vec![0.0; n0];
+            for per_candidate in &measured {
+                for (acc, s) in vertex_mse.iter_mut().zip(&per_candidate[c].1) {
+                    *acc += s;
+                }
+            }
+            for v in &mut vertex_mse {
+                *v /= measured.len().max(1) as Real;
+            }
+            let per_pose: Vec<PoseError> = measured.iter().map(|m| m[c].0).collect();
+            let mse = mean(&per_pose.iter().map(|e| e.mse).collect::<Vec<_>>());
+            let v2f = per_pose.iter().map(|e| e.v2f).collect::<Option<Vec<_>>>().map(|v| mean(&v));
+            UpsamplingError { per_pose, mse, v2f, vertex_mse }
+        })
+        .collect())
 }
 
 /// The MSE part of [`upsampling_error`] alone, per pose in the order given (m²): no
@@ -86,43 +147,62 @@ pub fn upsampling_mse(
     coarse_to_orig: &[u32],
     poses: &[usize],
 ) -> Result<Vec<Real>, HierarchyError> {
-    check_shapes(full, up_to_full, coarse_to_orig, poses)?;
+    let candidate = Upsampled { up_to_full, coarse: Coarse::GroundTruth(coarse_to_orig) };
+    check_candidate(full, &candidate, poses)?;
     Ok(poses
         .par_iter()
-        .map(|&pose| {
-            let up = upsample_pose(full, up_to_full, coarse_to_orig, pose);
+        .enumerate()
+        .map(|(slot, &pose)| {
+            let up = upsample_pose(full, &candidate, slot, pose);
             mean(&squared_errors(&up, &full.poses[pose]))
         })
         .collect())
 }
 
-/// `U · (pose at orig{k})`: the level-k ground truth of `pose` at full resolution.
-fn upsample_pose(full: &PoseSet, up_to_full: &CsrMatrix, coarse_to_orig: &[u32], pose: usize) -> Vec<Vec3> {
-    let truth = &full.poses[pose];
-    let coarse: Vec<Vec3> = coarse_to_orig.iter().map(|&o| truth[o as usize]).collect();
-    up_to_full.apply(&coarse).expect("shapes checked by the caller")
+/// `U · c` for the candidate's level-k positions `c` of `pose` (measured in `slot`).
+fn upsample_pose(full: &PoseSet, candidate: &Upsampled, slot: usize, pose: usize) -> Vec<Vec3> {
+    let up = match candidate.coarse {
+        Coarse::GroundTruth(coarse_to_orig) => {
+            let truth = &full.poses[pose];
+            let coarse: Vec<Vec3> = coarse_to_orig.iter().map(|&o| truth[o as usize]).collect();
+            candidate.up_to_full.apply(&coarse)
+        }
+        Coarse::Given(positions) => candidate.up_to_full.apply(&positions[slot]),
+    };
+    up.expect("shapes checked by the caller")
 }
 
 fn squared_errors(up: &[Vec3], truth: &[Vec3]) -> Vec<Real> {
     up.iter().zip(truth).map(|(u, t)| (u - t).norm_squared()).collect()
 }
 
-fn check_shapes(
-    full: &PoseSet,
-    up_to_full: &CsrMatrix,
-    coarse_to_orig: &[u32],
-    poses: &[usize],
-) -> Result<(), HierarchyError> {
+fn check_candidate(full: &PoseSet, candidate: &Upsampled, poses: &[usize]) -> Result<(), HierarchyError> {
     let n0 = full.vertex_count();
-    if up_to_full.rows != n0 || up_to_full.cols != coarse_to_orig.len() {
-        return Err(HierarchyError::ShapeMismatch {
-            left: (up_to_full.rows, up_to_full.cols),
-            right: (n0, coarse_to_orig.len()),
-        });
-    }
-    if let Some((coarse_idx, &fine_idx)) = coarse_to_orig.iter().enumerate().find(|&(_, &o)| o as usize >= n0)
-    {
-        return Err(HierarchyError::MapOutOfRange { coarse_idx, fine_idx, fine_count: n0 });
+    let up = candidate.up_to_full;
+    let n_coarse = match candidate.coarse {
+        Coarse::GroundTruth(coarse_to_orig) => {
+            if let Some((coarse_idx, &fine_idx)) =
+                coarse_to_orig.iter().enumerate().find(|&(_, &o)| o as usize >= n0)
+            {
+                return Err(HierarchyError::MapOutOfRange { coarse_idx, fine_idx, fine_count: n0 });
+            }
+            coarse_to_orig.len()
+        }
+        Coarse::Given(positions) => {
+            if let Some(p) = positions.iter().find(|p| p.len() != up.cols) {
+                return Err(HierarchyError::ShapeMismatch { left: (up.rows, up.cols), right: (p.len(), 3) });
+            }
+            if positions.len() != poses.len() {
+                return Err(HierarchyError::ShapeMismatch {
+                    left: (poses.len(), up.cols),
+                    right: (positions.len(), up.cols),
+                });
+            }
+            up.cols
+        }
+    };
+    if up.rows != n0 || up.cols != n_coarse {
+        return Err(HierarchyError::ShapeMismatch { left: (up.rows, up.cols), right: (n0, n_coarse) });
     }
     if let Some(&pose) = poses.iter().find(|&&p| p >= full.pose_count()) {
         return Err(HierarchyError::PoseOutOfRange { pose, poses: full.pose_count() });

@@ -1,0 +1,80 @@
+//! A chain of levels refitted on a subset of poses: what held-out measurement needs. Per
+//! fold, every level's U is rebuilt on the fold's training poses (the levels' vertices
+//! and faces stay as they are) and the U's are composed to full resolution, so the
+//! measured poses reach no upsampler of the chain.
+//!
+//! Index spaces: each level's `coarse_to_fine` indexes the level above it; level 0 is
+//! `full`. The composed upsampler of level k is `n_0 × n_k`.
+
+use desal_mesh::{Face, PoseSet};
+
+use crate::error::HierarchyError;
+use crate::level::{LevelInput, Upsampler, build_level, nest};
+use crate::sparse::CsrMatrix;
+
+/// One level of a chain: its vertices as vertices of the level above (`map{k+1}`) and
+/// its faces.
+#[derive(Debug, Clone, Copy)]
+pub struct ChainLevel<'a> {
+    pub coarse_to_fine: &'a [u32],
+    pub coarse_faces: &'a [Face],
+}
+
+/// The registered pose set of a level: every pose of `full` at `coarse_to_orig`
+/// (`orig{k}`), with the level's `faces`; names and template as `full`'s.
+///
+/// Errors: an index past `full`'s vertices, faces past the level's vertex count.
+pub fn level_poses(
+    full: &PoseSet,
+    coarse_to_orig: &[u32],
+    faces: &[Face],
+) -> Result<PoseSet, HierarchyError> {
+    let n0 = full.vertex_count();
+    if let Some((coarse_idx, &fine_idx)) = coarse_to_orig.iter().enumerate().find(|&(_, &o)| o as usize >= n0)
+    {
+        return Err(HierarchyError::MapOutOfRange { coarse_idx, fine_idx, fine_count: n0 });
+    }
+    let gather = |v: &[desal_mesh::Vec3]| coarse_to_orig.iter().map(|&o| v[o as usize]).collect();
+    Ok(PoseSet::try_new(
+        full.names.clone(),
+        full.poses.iter().map(|v| gather(v)).collect(),
+        faces.to_vec(),
+        full.template,
+    )?)
+}
+
+/// The composed upsamplers `U_0`, `U_0 · U_1`, …, one per level of `chain` (so entry k
+/// is `n_0 × n_{k+1}`), every level's U built with `upsampler` on the poses of `full`
+/// that `training` marks (one flag per pose).
+///
+/// Errors: those of [`build_level`] for any level, an empty chain (`EmptyCoarse`).
+pub fn composed_upsamplers(
+    full: &PoseSet,
+    chain: &[ChainLevel],
+    training: &[bool],
+    upsampler: &Upsampler,
+) -> Result<Vec<CsrMatrix>, HierarchyError> {
+    if chain.is_empty() {
+        return Err(HierarchyError::EmptyCoarse { vertices: 0, faces: 0 });
+    }
+    let mut composed: Vec<CsrMatrix> = Vec::with_capacity(chain.len());
+    let mut fine_to_orig: Vec<u32> = (0..full.vertex_count() as u32).collect();
+    let mut fine_faces: Vec<Face> = full.faces.clone();
+    for level in chain {
+        let fine = level_poses(full, &fine_to_orig, &fine_faces)?;
+        let input = LevelInput {
+            fine: &fine,
+            coarse_to_fine: level.coarse_to_fine,
+            coarse_faces: level.coarse_faces,
+            training,
+        };
+        let up = build_level(&input, upsampler)?.up;
+        composed.push(match composed.last() {
+            None => up,
+            Some(c) => c.mul(&up)?,
+        });
+        fine_to_orig = nest(&fine_to_orig, level.coarse_to_fine);
+        fine_faces = level.coarse_faces.to_vec();
+    }
+    Ok(composed)
+}
