@@ -29,7 +29,8 @@ fn posed(rig: &Rig, weld: &Weld, world_by_name: &HashMap<String, Mat4>) -> TriMe
     let joints: Vec<Mat4> = (0..rig.skin.joints.len())
         .map(|j| {
             let name = rig.joint_name(j);
-            let world = world_by_name.get(&name).unwrap_or_else(|| panic!("joint '{name}' is not in the input rig"));
+            let world =
+                world_by_name.get(&name).unwrap_or_else(|| panic!("joint '{name}' is not in the input rig"));
             world * rig.skin.inverse_bind_matrix(j)
         })
         .collect();
@@ -87,8 +88,12 @@ fn main() {
     for k in 0..count {
         let t = offset + step * k as f64;
         let world = world_matrices(&input, &animated_locals(&input, animation, t));
-        let by_name: HashMap<String, Mat4> =
-            input.nodes.iter().enumerate().filter_map(|(n, node)| Some((node.name.clone()?, world[n]))).collect();
+        let by_name: HashMap<String, Mat4> = input
+            .nodes
+            .iter()
+            .enumerate()
+            .filter_map(|(n, node)| Some((node.name.clone()?, world[n])))
+            .collect();
         let full = posed(&input, &input_weld, &by_name);
         for (m, ((_, rig), weld)) in methods.iter().zip(&welds).enumerate() {
             let mesh = posed(rig, weld, &by_name);
