@@ -293,3 +293,56 @@ pub fn simplified_rig(
     let targets = desal_rig::PoseTargets { joints: &posed.joints, positions: &posed.poses.poses };
     Ok(desal_rig::simplified_rig(rig, &posed.weld, &input, &targets)?)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params() -> RigParams {
+        toml::from_str("file = \"a.glb\"").unwrap()
+    }
+
+    /// Every setting and the file's bytes reach the keys; the path does not.
+    #[test]
+    fn each_key_input_changes_the_key() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.glb"), dir.path().join("b.glb"));
+        std::fs::write(&a, b"one").unwrap();
+        std::fs::write(&b, b"one").unwrap();
+        let base = params();
+        let key = |file: &Path, p: &RigParams| RigInput { file, params: p }.ingest_key().unwrap().hash();
+        let reference = key(&a, &base);
+        assert_eq!(key(&b, &base), reference, "the same bytes under another name");
+        let variants = [
+            RigParams { mesh: Some("Body".into()), ..base.clone() },
+            RigParams { poses: PosesFrom::Random, ..base.clone() },
+            RigParams { frames: 61, ..base.clone() },
+            RigParams { seed: 1, ..base.clone() },
+            RigParams { max_degrees: 31.0, ..base.clone() },
+        ];
+        for v in &variants {
+            assert_ne!(key(&a, v), reference, "{v:?}");
+        }
+        std::fs::write(&b, b"two").unwrap();
+        assert_ne!(key(&b, &base), reference, "other bytes");
+        let poses = ContentHash::of(b"poses");
+        let labels = |p: &RigParams| RigInput { file: &a, params: p }.labels_key(poses).unwrap().hash();
+        assert_ne!(labels(&RigParams { min_part_vertices: 51, ..base.clone() }), labels(&base));
+    }
+
+    #[test]
+    fn defaults_and_bad_settings() {
+        let p = params();
+        assert_eq!(
+            (p.poses, p.frames, p.seed, p.max_degrees, p.min_part_vertices),
+            (PosesFrom::Animations, 60, 0, 30.0, 50)
+        );
+        assert!(RigParams { frames: 0, ..p.clone() }.frame_config().is_err());
+        assert!(RigParams { max_degrees: 200.0, ..p.clone() }.frame_config().is_err());
+        assert!(RigParams { min_part_vertices: 2, ..p.clone() }.parts_config().is_err());
+        let both: RigParams = toml::from_str("file = \"a.glb\"\nposes = \"both\"").unwrap();
+        assert_eq!(both.poses, PosesFrom::Both);
+        assert!(toml::from_str::<RigParams>("file = \"a.glb\"\nposes = \"all\"").is_err());
+        assert!(toml::from_str::<RigParams>("file = \"a.glb\"\nparts = \"auto\"").is_err());
+    }
+}
