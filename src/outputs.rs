@@ -11,6 +11,7 @@
 //! | `simplified-template-raw.ply` | stage 3's template before mapping |
 //! | `simplified/<pose>.ply`, `simplified/parts.txt`, `vertex_map.txt` | the registered simplified pose set |
 //! | `hierarchy-<k>.dsa`, `hierarchy.npz`, `hierarchy.json` | with `[dataset.hierarchy]`: each level's cache entry, the npz of every level (`stages::hierarchy::npz_arrays`), the levels' summaries |
+//! | `simplified.glb`, `simplified-rig.json` | with `[dataset.rig]`: the simplified rig (`stages::rig::simplified_glb`) and its figures |
 //! | `report.json` | the run's report, with `outputs_key` |
 //! | `eval/` | `desal eval`'s, kept across runs |
 
@@ -106,6 +107,17 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
     add_artifact(&mut outputs, "map", &stages.map.artifact_path, &stages.map.summary);
     if !stages.hierarchy.is_empty() {
         add_hierarchy(&mut outputs, stages, set)?;
+    }
+    if let Some(rig) = &stages.rig {
+        // Built before anything is written: a rig that cannot be written fails the run
+        // with the output folder untouched.
+        let (bytes, summary) = crate::stages::rig::simplified_glb(rig, stages.simplified.body()?, map)?;
+        outputs
+            .files
+            .push(("simplified.glb".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, &bytes)?))));
+        outputs
+            .files
+            .push(("simplified-rig.json".into(), Box::new(move |p| Ok(desal_io::write_json(p, &summary)?))));
     }
     Ok(outputs)
 }

@@ -14,6 +14,7 @@ use crate::stages::fit::FitParams;
 use crate::stages::hierarchy::HierarchyParams;
 use crate::stages::ingest::{IngestParams, TemplateSpec, pose_name};
 use crate::stages::parts::PartsParams;
+use crate::stages::rig::{RigInput, RigParams};
 use crate::stages::saliency::SaliencyParams;
 use crate::stages::simplify::{SimplifyParams, TARGET_KEYS};
 use crate::stages::{DatasetInputs, LabelsInput};
@@ -39,13 +40,19 @@ struct PipelineToml {
 pub struct DatasetToml {
     /// Unique name; also the output sub-folder.
     pub name: String,
-    /// A glob (`"scans/*.ply"`) or an explicit list of pose files.
-    pub poses: PosesSpec,
+    /// A glob (`"scans/*.ply"`) or an explicit list of pose files (absent for a rig).
+    #[serde(default)]
+    pub poses: Option<PosesSpec>,
     /// The template: a pose file name or stem, or a 0-based index into the sorted list.
     #[serde(default)]
     pub template: Option<TemplateSpec>,
-    /// Part labels file (text or JSON), or `"auto"`: parts discovered from the poses.
-    pub labels: LabelsSpec,
+    /// Part labels file (text or JSON), or `"auto"`: parts discovered from the poses
+    /// (absent for a rig).
+    #[serde(default)]
+    pub labels: Option<LabelsSpec>,
+    /// `[dataset.rig]`: a skinned glTF in place of `poses` and `labels`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rig: Option<RigParams>,
     /// Part discovery with `labels = "auto"`: `parts = K`, or a `[dataset.parts]` table.
     #[serde(default, deserialize_with = "crate::stages::parts::count_or_table")]
     pub parts: PartsParams,
@@ -94,6 +101,8 @@ impl From<LabelsSpec> for String {
 pub enum LabelsSource {
     File(PathBuf),
     Auto,
+    /// From the rig's dominant joints.
+    Rig,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -110,6 +119,8 @@ pub struct Dataset {
     /// Pose files, sorted (glob) or in the listed order.
     pub pose_files: Vec<PathBuf>,
     pub labels: LabelsSource,
+    /// The rig file of a `[dataset.rig]` dataset, absolute.
+    pub rig_file: Option<PathBuf>,
     /// Where this dataset's outputs go.
     pub out_dir: PathBuf,
 }
@@ -126,11 +137,16 @@ impl Dataset {
             labels: match &self.labels {
                 LabelsSource::File(file) => LabelsInput::File(file),
                 LabelsSource::Auto => LabelsInput::Auto(&self.spec.parts),
+                LabelsSource::Rig => LabelsInput::Rig,
             },
             fit: &self.spec.fit,
             saliency: &self.spec.saliency,
             simplify: &self.spec.simplify,
             hierarchy: self.spec.hierarchy.as_ref(),
+            rig: match (&self.rig_file, &self.spec.rig) {
+                (Some(file), Some(params)) => Some(RigInput { file, params }),
+                _ => None,
+            },
         }
     }
 }
@@ -183,17 +199,40 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
         if datasets.iter().any(|d: &Dataset| d.spec.name == spec.name) {
             bail!("{}: two datasets are named '{}'; names must be unique", path.display(), spec.name);
         }
-        let pose_files = resolve_poses(&base, &spec.poses)
-            .with_context(|| format!("{}: dataset '{}'", path.display(), spec.name))?;
-        // Every stage parameter is checked now, before any stage runs.
-        check_parameters(&spec, &pose_files)
-            .with_context(|| format!("{}: dataset '{}'", path.display(), spec.name))?;
-        let labels = match &spec.labels {
-            LabelsSpec::File(file) => LabelsSource::File(base.join(file)),
-            LabelsSpec::Auto => LabelsSource::Auto,
+        let in_dataset = || format!("{}: dataset '{}'", path.display(), spec.name);
+        let (pose_files, labels, rig_file) = match (&spec.rig, &spec.poses, &spec.labels) {
+            (Some(rig), None, None) => {
+                if spec.template.is_some() || spec.ignore_pose_faces || spec.parts != PartsParams::default() {
+                    bail!(
+                        "{}: a [dataset.rig] takes its template (the bind pose) and parts from the rig: \
+                         remove `template`, `ignore_pose_faces` and `parts`",
+                        in_dataset()
+                    );
+                }
+                (Vec::new(), LabelsSource::Rig, Some(base.join(&rig.file)))
+            }
+            (Some(_), _, _) => {
+                bail!(
+                    "{}: a [dataset.rig] replaces `poses` and `labels`: give one or the other",
+                    in_dataset()
+                )
+            }
+            (None, Some(poses), Some(labels)) => {
+                let pose_files = resolve_poses(&base, poses).with_context(in_dataset)?;
+                let labels = match labels {
+                    LabelsSpec::File(file) => LabelsSource::File(base.join(file)),
+                    LabelsSpec::Auto => LabelsSource::Auto,
+                };
+                (pose_files, labels, None)
+            }
+            (None, _, _) => {
+                bail!("{}: give `poses` and `labels`, or a [dataset.rig] table", in_dataset())
+            }
         };
+        // Every stage parameter is checked now, before any stage runs.
+        check_parameters(&spec, &pose_files).with_context(in_dataset)?;
         let out_dir = out_root.join(&spec.name);
-        datasets.push(Dataset { spec, pose_files, labels, out_dir });
+        datasets.push(Dataset { spec, pose_files, labels, rig_file, out_dir });
     }
     Ok(Pipeline { path: path.to_owned(), out_root, datasets })
 }
@@ -210,14 +249,18 @@ fn check_parameters(spec: &DatasetToml, pose_files: &[PathBuf]) -> Result<()> {
         );
     }
     spec.simplify.config()?;
-    match spec.labels {
-        LabelsSpec::Auto => {
+    match &spec.labels {
+        Some(LabelsSpec::Auto) => {
             spec.parts.config()?;
         }
-        LabelsSpec::File(_) if spec.parts != PartsParams::default() => {
+        Some(LabelsSpec::File(_)) if spec.parts != PartsParams::default() => {
             bail!("`parts` applies to `labels = \"auto\"` only; this dataset reads its labels from a file")
         }
-        LabelsSpec::File(_) => {}
+        Some(LabelsSpec::File(_)) | None => {}
+    }
+    if let Some(rig) = &spec.rig {
+        rig.frame_config()?;
+        rig.parts_config()?;
     }
     if let Some(h) = &spec.hierarchy {
         h.config()?;

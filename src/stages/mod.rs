@@ -11,6 +11,7 @@ pub mod hierarchy;
 pub mod ingest;
 pub mod map;
 pub mod parts;
+pub mod rig;
 pub mod runner;
 pub mod saliency;
 pub mod simplify;
@@ -43,6 +44,9 @@ pub struct DatasetInputs<'a> {
     pub simplify: &'a SimplifyParams,
     /// `[dataset.hierarchy]`, when the dataset asks for one.
     pub hierarchy: Option<&'a HierarchyParams>,
+    /// `[dataset.rig]`: the poses and labels come from a skinned glTF instead of
+    /// `ingest` and `labels`.
+    pub rig: Option<rig::RigInput<'a>>,
 }
 
 /// Where a dataset's part labels come from: a labels file, or discovery from the poses.
@@ -50,6 +54,8 @@ pub struct DatasetInputs<'a> {
 pub enum LabelsInput<'a> {
     File(&'a Path),
     Auto(&'a PartsParams),
+    /// From the rig of [`DatasetInputs::rig`] (dominant joints).
+    Rig,
 }
 
 /// The stages of one dataset, run or found in the cache. Bodies are decoded lazily, the
@@ -66,6 +72,8 @@ pub struct DatasetStages {
     pub map: Staged<MapV1, MapSummary>,
     /// One per coarse level, level 1 first (empty without `[dataset.hierarchy]`).
     pub hierarchy: Vec<Staged<HierarchyLevelV1, LevelSummary>>,
+    /// The rig the poses came from, for a `[dataset.rig]` dataset (`simplified.glb`).
+    pub rig: Option<rig::RigSource>,
     pose_set: OnceCell<PoseSet>,
     part_labels: OnceCell<PartLabels>,
 }
@@ -105,27 +113,40 @@ pub fn run_stages(
     runner: &mut StageRunner,
     progress: &dyn Progress,
 ) -> Result<DatasetStages> {
-    // Ingest: keyed on the bytes of every pose file, never on their paths.
-    let (key, template) = inputs.ingest.key()?;
-    let poses = runner
-        .stage(Stage::Ingest, key, &inputs.ingest.hints(), || inputs.ingest.compute(template, progress))?;
+    // Ingest: keyed on the bytes of every pose file (or of the rig), never on their paths.
+    let poses = match &inputs.rig {
+        Some(rig) => runner.stage(Stage::Ingest, rig.ingest_key()?, &rig.hints(), || rig.compute_poses())?,
+        None => {
+            let (key, template) = inputs.ingest.key()?;
+            runner.stage(Stage::Ingest, key, &inputs.ingest.hints(), || {
+                inputs.ingest.compute(template, progress)
+            })?
+        }
+    };
     // Decoded once, and only if a later stage has to run.
     let set_cell = OnceCell::new();
     let set = || -> Result<&PoseSet> { get_or_try_init(&set_cell, || Ok(poses.body()?.to_pose_set()?)) };
 
     // Labels: a file validated against the pose set and keyed on its bytes, or parts
     // discovered from the poses and keyed on their parameters and the poses' hash.
-    let (labels, parts_summary) = match inputs.labels {
-        LabelsInput::File(file) => {
+    let (labels, parts_summary) = match (&inputs.rig, inputs.labels) {
+        (Some(rig), LabelsInput::Rig) => {
+            let key = rig.labels_key(poses.hash)?;
+            (runner.stage(Stage::Ingest, key, &rig.hints(), || rig.compute_labels(set()?))?, None)
+        }
+        (None, LabelsInput::File(file)) => {
             let key = ingest::labels_key(file, poses.hash)?;
             let hints = vec![("labels_file".to_owned(), ingest::file_name(file))];
             (runner.stage(Stage::Ingest, key, &hints, || ingest::compute_labels(file, set()?))?, None)
         }
-        LabelsInput::Auto(params) => {
+        (None, LabelsInput::Auto(params)) => {
             let key = params.key(poses.hash)?;
             let found = runner.stage(Stage::Parts, key, &[], || parts::compute(params, set()?))?;
             let summary = found.summary.clone();
             (found.map_summary(|s| s.labels_summary()), Some(summary))
+        }
+        (Some(_), _) | (None, LabelsInput::Rig) => {
+            anyhow::bail!("a rig dataset takes its labels from its rig, and only a rig dataset does")
         }
     };
     let labels_cell = OnceCell::new();
@@ -183,6 +204,7 @@ pub fn run_stages(
 
     Ok(DatasetStages {
         hierarchy: levels,
+        rig: inputs.rig.map(|r| r.to_owned()),
         poses,
         labels,
         parts: parts_summary,

@@ -7,6 +7,7 @@ mod faults;
 mod hierarchy;
 mod ingest;
 mod parts;
+mod rig;
 mod stages;
 mod support;
 mod tidy;

@@ -11,6 +11,8 @@ pub type Mat3 = nalgebra::Matrix3<f64>;
 pub type Mat4 = nalgebra::Matrix4<f64>;
 /// A unit quaternion (rotations in the sample generator and the viewer).
 pub type UnitQuat = nalgebra::UnitQuaternion<f64>;
+/// A quaternion, not necessarily of unit length (as read from a file, before normalising).
+pub type Quat = nalgebra::Quaternion<f64>;
 
 /// Builds a `Vec3` from an `f32` triple as stored on disk.
 #[inline]

@@ -14,6 +14,10 @@ pub enum SampleError {
     #[error(transparent)]
     Io(#[from] desal_io::IoError),
 
+    /// The sample rig could not be built or written.
+    #[error("sample rig: {0}")]
+    Rig(String),
+
     /// A JSON source file does not have the expected structure.
     #[error("{path}: {reason}")]
     Json { path: PathBuf, reason: String },

@@ -23,6 +23,7 @@ pub mod error;
 pub mod parts;
 pub mod poses;
 pub mod quality;
+pub mod rig;
 pub mod skeleton;
 pub mod skinning;
 pub mod source;
@@ -74,6 +75,8 @@ impl Default for SampleConfig {
 pub struct Sample {
     pub poses: PoseSet,
     pub labels: PartLabels,
+    /// The same body as a skinned glTF rig whose animation's keyframes are the poses.
+    pub rig: desal_rig::Rig,
     pub report: SampleReport,
 }
 
@@ -123,10 +126,12 @@ pub fn generate(
     let rest_intersections = quality::count_self_intersections(&body.positions, &body.faces);
     let rest_floor = lowest_y(&body.positions);
     let mut posed_sets = Vec::with_capacity(poses.len());
+    let mut keyframes = Vec::with_capacity(poses.len());
     let mut pose_reports = Vec::with_capacity(poses.len());
     for pose in poses {
         let local = poses::local_rotations(&skeleton, pose)?;
         let transforms = skeleton.forward_kinematics(&local);
+        // `local` is kept for the rig's keyframes.
         let mut posed = skin(&body.positions, &weights, &transforms);
         let quality = quality::measure_pose(&body.positions, &posed, &body.faces, &weights, &transforms);
         check_clean(pose, &quality, rest_intersections, config)?;
@@ -135,6 +140,7 @@ pub fn generate(
             posed.iter_mut().for_each(|p| p.y += shift);
         }
         let posed = to_output_units(&posed, config.scale);
+        keyframes.push((local, shift));
         pose_reports.push(PoseReport {
             name: pose.name.clone(),
             quality,
@@ -152,6 +158,15 @@ pub fn generate(
     let part_vertices = parts::check_part_sizes(&labels, config.min_part_vertices)?;
     let part_pieces = parts::part_pieces(&labels, &body.faces);
 
+    let rig = rig::build_rig(&rig::RigInputs {
+        body_faces: &body.faces,
+        body_positions: &body.positions,
+        uvs: &assets.uvs,
+        skeleton: &skeleton,
+        weights: &weights,
+        poses: &keyframes,
+        scale: config.scale,
+    })?;
     let names = poses.iter().map(|p| p.name.clone()).collect();
     let pose_set = PoseSet::try_new(names, posed_sets, body.faces.clone(), 0)?;
     let report = SampleReport {
@@ -165,7 +180,7 @@ pub fn generate(
         rest_self_intersections: rest_intersections,
         poses: pose_reports,
     };
-    Ok(Sample { poses: pose_set, labels, report })
+    Ok(Sample { poses: pose_set, labels, rig, report })
 }
 
 /// The body: vertices `0..body_vertex_count` of `base` and the faces that use only
@@ -228,8 +243,11 @@ fn ply_comments(pose: &str) -> Vec<String> {
     ]
 }
 
-/// Writes `sample` into `out_dir`: `poses/<name>.ply` per pose, `labels.json` and
-/// `labels.txt`. Returns the written paths in that order. Files of poses no longer in
+/// File name of the sample rig in the sample folder.
+pub const RIG_FILE: &str = "rig.glb";
+
+/// Writes `sample` into `out_dir`: `poses/<name>.ply` per pose, `labels.json`,
+/// `labels.txt` and the rig `rig.glb`. Returns the written paths in that order. Files of poses no longer in
 /// the table are not removed.
 pub fn write_sample(out_dir: &Path, sample: &Sample) -> Result<Vec<PathBuf>, SampleError> {
     let mut written = Vec::new();
@@ -246,5 +264,9 @@ pub fn write_sample(out_dir: &Path, sample: &Sample) -> Result<Vec<PathBuf>, Sam
     let txt = out_dir.join("labels.txt");
     desal_io::labels::write_labels_txt(&txt, &sample.labels)?;
     written.push(txt);
+    let glb = out_dir.join(RIG_FILE);
+    let bytes = desal_rig::write_glb(&sample.rig).map_err(|e| SampleError::Rig(e.to_string()))?;
+    desal_io::atomic::write_atomic(&glb, &bytes)?;
+    written.push(glb);
     Ok(written)
 }

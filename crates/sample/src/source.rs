@@ -52,16 +52,20 @@ pub struct SourceAssets {
     pub weights: BTreeMap<String, Vec<(u32, f64)>>,
     /// Vertex groups: name → inclusive `[first, last]` base-mesh vertex ranges.
     pub groups: BTreeMap<String, Vec<[u32; 2]>>,
+    /// The base mesh's texture coordinates and the UV corners of its triangles.
+    pub uvs: crate::rig::ObjUvs,
 }
 
 impl SourceAssets {
     /// Reads the four asset files from `dir` (see the `*_FILE` constants).
     pub fn load(dir: &Path) -> Result<Self, SampleError> {
         let base = desal_io::read_mesh(&dir.join(BASE_MESH_FILE))?;
+        let uvs =
+            crate::rig::parse_obj_uvs(&read_text(&dir.join(BASE_MESH_FILE))?, &dir.join(BASE_MESH_FILE))?;
         let rig = parse_rig(&read_text(&dir.join(RIG_FILE))?, &dir.join(RIG_FILE))?;
         let weights = parse_weights(&read_text(&dir.join(WEIGHTS_FILE))?, &dir.join(WEIGHTS_FILE))?;
         let groups = parse_groups(&read_text(&dir.join(GROUPS_FILE))?, &dir.join(GROUPS_FILE))?;
-        Ok(Self { base, rig, weights, groups })
+        Ok(Self { base, rig, weights, groups, uvs })
     }
 
     /// The base-mesh vertex indices of group `name`, ascending as listed (`None` when

@@ -156,3 +156,34 @@ fn the_committed_labels_have_16_single_patch_parts() {
     let text = desal_io::labels::read_labels(&data_samples().join("labels.txt")).unwrap();
     assert_eq!(text, labels);
 }
+
+#[test]
+fn the_committed_rig_welds_to_the_template_and_its_keyframes_are_the_poses() {
+    use desal_rig::{FrameConfig, PoseSource, ReadOptions};
+    let path = data_samples().join(desal_sample::RIG_FILE);
+    let rig = desal_rig::read_rig(&path, &ReadOptions::default()).unwrap();
+    assert_eq!(rig.skin.joints.len(), 31);
+    // The UV seams split the mesh; welding by position and weights gives the body back.
+    assert!(rig.mesh.vertex_count() > 13380, "{}", rig.mesh.vertex_count());
+    let frames = FrameConfig {
+        source: PoseSource::Animations,
+        frames: sample().poses.pose_count(),
+        ..FrameConfig::default()
+    };
+    let frames = desal_rig::sample_frames(&rig, &frames, &path).unwrap();
+    let posed = desal_rig::pose_rig(&rig, &frames).unwrap();
+    assert_eq!(posed.weld.welded_count(), 13380);
+    assert_eq!(posed.poses.faces, sample().poses.faces);
+    // Pose 0 of the rig is the bind pose, then one frame per keyframe: each is the PLY
+    // sample's pose, up to f32 rounding of the weights, rotations and offsets.
+    let mut worst: f64 = 0.0;
+    for (k, expected) in sample().poses.poses.iter().enumerate() {
+        for (p, q) in posed.poses.poses[k + 1].iter().zip(expected) {
+            worst = worst.max((p - q).norm());
+        }
+    }
+    assert!(worst < 1e-5, "largest difference {worst} m");
+    for (p, q) in posed.poses.poses[0].iter().zip(&sample().poses.poses[0]) {
+        assert!((p - q).norm() < 1e-6);
+    }
+}

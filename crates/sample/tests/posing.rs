@@ -193,6 +193,7 @@ fn rig_errors_name_the_bone() {
         rig: rig(text).unwrap(),
         weights: BTreeMap::new(),
         groups: [("joint-a".to_owned(), vec![[0, 0]])].into(),
+        uvs: desal_sample::rig::ObjUvs { uvs: vec![], triangles: vec![], vertex_triangles: vec![] },
     };
     let err =
         Skeleton::from_assets(&assets(&format!("{{{}, {}}}", one("a", ""), one("b", "zz")))).unwrap_err();

@@ -1,0 +1,97 @@
+//! Skinned glTF 2.0 rigs in and out of desal.
+//!
+//! Engines, VR avatars and real-time trackers deform a body by linear blend skinning
+//! (LBS): a skeleton, per-vertex joint weights and a glTF file. This crate turns such a
+//! rig into what desal's stages run on — a registered pose set and part labels — and
+//! turns the simplified mesh back into a rig that an engine loads:
+//!
+//! 1. [`read_rig`]: the node tree, the one skinned mesh (with UVs and normals), its skin
+//!    and the animations, through the `gltf` crate; bad input refused with the file and
+//!    the element ([`RigError`]).
+//! 2. [`Weld`]: split vertices of UV and normal seams welded by position and weights.
+//! 3. [`sample_frames`] and [`pose_rig`]: frames of the animations and/or seeded random
+//!    joint rotations, posed by LBS into a [`PoseSet`] over the welded vertices; the bind
+//!    pose is the template (pose 0).
+//! 4. [`dominant_joint_parts`]: labels from each vertex's heaviest joint.
+//! 5. [`simplified_rig`] then [`write_glb`]: the same skeleton, inverse bind matrices and
+//!    animations with the simplified mesh, seams kept, weights exact (subset placement)
+//!    or refitted (optimal placement).
+//!
+//! Like `desal-sample`, this crate is not a stage: it knows a file format (glTF), the
+//! one exception to "`desal-io` knows every format", because the `gltf` crate is the
+//! whole reader and the writer's layout is tied to the rig model here.
+
+pub mod error;
+pub mod model;
+pub mod parts;
+pub mod pose;
+pub mod read;
+pub mod refit;
+pub mod simplified;
+pub mod weld;
+pub mod write;
+
+use desal_mesh::math::Mat4;
+use desal_mesh::{PoseSet, Vec3};
+
+pub use error::RigError;
+pub use model::{
+    Animation, Channel, Influences, Interpolation, LocalTransform, Node, Rig, Skin, SkinnedMesh,
+};
+pub use parts::{PartsConfig, dominant_joint_parts};
+pub use pose::{Frame, FrameConfig, PoseSource, joint_matrices, sample_frames, skin_points};
+pub use read::{ReadOptions, read_rig, read_rig_from};
+pub use simplified::{PoseTargets, SimplifiedInput, SimplifiedReport, simplified_rig};
+pub use weld::Weld;
+pub use write::write_glb;
+
+/// Version of what this crate makes of a rig (weld, frames, LBS, labels, output); bump
+/// when the output for the same file and settings changes.
+pub const VERSION: u32 = 1;
+
+/// Name of the template pose: the mesh as bound (every skinning matrix the identity).
+pub const BIND_POSE: &str = "bind";
+
+/// A rig posed at its frames, over welded vertices.
+#[derive(Debug, Clone)]
+pub struct PosedRig {
+    pub weld: Weld,
+    /// Influences of each welded vertex (its first copy's).
+    pub influences: Influences,
+    /// Pose 0 is the bind pose (the template), then one pose per frame.
+    pub poses: PoseSet,
+    /// `joints[k][j]`: joint `j`'s skinning matrix in pose `k` (identities for the bind pose).
+    pub joints: Vec<Vec<Mat4>>,
+}
+
+/// Poses the welded mesh of `rig` at `frames` by linear blend skinning.
+pub fn pose_rig(rig: &Rig, frames: &[Frame]) -> Result<PosedRig, RigError> {
+    let weld = Weld::new(&rig.mesh);
+    let representatives = weld.representatives();
+    let mut influences = Influences::new();
+    for &s in &representatives {
+        influences.push_row(rig.mesh.influences.of(s as usize).map(|(j, w)| (j as u16, w)));
+    }
+    let rest: Vec<Vec3> = representatives
+        .iter()
+        .map(|&s| {
+            let p = rig.mesh.positions[s as usize];
+            Vec3::new(p[0].into(), p[1].into(), p[2].into())
+        })
+        .collect();
+    let mut names = vec![BIND_POSE.to_owned()];
+    let mut positions = vec![rest.clone()];
+    let mut joints = vec![vec![Mat4::identity(); rig.skin.joints.len()]];
+    for frame in frames {
+        let m = joint_matrices(rig, &frame.locals);
+        positions.push(skin_points(&rest, &influences, &m));
+        names.push(frame.name.clone());
+        joints.push(m);
+    }
+    if let Some(k) = positions.iter().position(|p| !p.iter().all(|q| q.iter().all(|c| c.is_finite()))) {
+        return Err(RigError::Settings(format!("pose '{}' has non-finite positions", names[k])));
+    }
+    let poses = PoseSet::try_new(names, positions, weld.faces.clone(), 0)
+        .map_err(|e| RigError::Settings(format!("the posed rig is not a valid pose set: {e}")))?;
+    Ok(PosedRig { weld, influences, poses, joints })
+}

@@ -1,0 +1,236 @@
+//! The in-memory rig: the node tree, one skin, the animations and one skinned mesh, as
+//! read from a glTF file ([`crate::read`]) or built by a generator, and as written back
+//! ([`crate::write`]). Values keep the file's `f32` precision, so a rig read and written
+//! again keeps its numbers bit for bit.
+//!
+//! Index spaces: `node` indexes [`Rig::nodes`]; `joint` indexes [`Skin::joints`] (what
+//! `JOINTS_n` stores); `split` indexes the mesh's own vertices, which repeat a position
+//! along UV and normal seams ([`crate::weld`] maps them to welded vertices).
+
+use desal_mesh::math::Mat4;
+
+/// A node's local transform.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LocalTransform {
+    /// Translation, rotation (unit quaternion `[x, y, z, w]`) and scale, composed T·R·S.
+    Trs { translation: [f32; 3], rotation: [f32; 4], scale: [f32; 3] },
+    /// A column-major 4×4 matrix (glTF's `matrix`). It cannot be animated.
+    Matrix([f32; 16]),
+}
+
+impl LocalTransform {
+    pub const IDENTITY: Self =
+        Self::Trs { translation: [0.0; 3], rotation: [0.0, 0.0, 0.0, 1.0], scale: [1.0; 3] };
+}
+
+/// One node of the scene graph.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Node {
+    pub name: Option<String>,
+    pub children: Vec<usize>,
+    pub transform: LocalTransform,
+}
+
+/// The skin of the skinned mesh.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Skin {
+    pub name: Option<String>,
+    /// Joint `j` is node `joints[j]`.
+    pub joints: Vec<usize>,
+    /// One per joint, column-major as stored (glTF's `inverseBindMatrices`; identity when
+    /// the file has none).
+    pub inverse_bind: Vec<[f32; 16]>,
+    /// The skeleton root node, when the file names one.
+    pub skeleton: Option<usize>,
+}
+
+impl Skin {
+    /// The inverse bind matrix of `joint` in `f64`.
+    pub fn inverse_bind_matrix(&self, joint: usize) -> Mat4 {
+        Mat4::from_column_slice(&self.inverse_bind[joint].map(f64::from))
+    }
+}
+
+/// What an animation channel drives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Path {
+    Translation,
+    Rotation,
+    Scale,
+}
+
+/// How an animation sampler interpolates between keyframes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Interpolation {
+    Step,
+    Linear,
+    /// Hermite spline; each keyframe stores in-tangent, value, out-tangent.
+    CubicSpline,
+}
+
+/// One animated property of one node.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Channel {
+    pub node: usize,
+    pub path: Path,
+    pub interpolation: Interpolation,
+    /// Keyframe times in seconds, strictly increasing.
+    pub times: Vec<f32>,
+    /// Keyframe values, flattened: 3 (translation, scale) or 4 (rotation) per value, and
+    /// three values per keyframe for [`Interpolation::CubicSpline`].
+    pub values: Vec<f32>,
+}
+
+impl Channel {
+    /// Components per value: 4 for rotations, 3 otherwise.
+    pub fn width(&self) -> usize {
+        if self.path == Path::Rotation { 4 } else { 3 }
+    }
+}
+
+/// A named animation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Animation {
+    pub name: Option<String>,
+    pub channels: Vec<Channel>,
+}
+
+impl Animation {
+    /// Start and end time over all channels (`(0, 0)` when there are no keyframes).
+    pub fn time_range(&self) -> (f32, f32) {
+        let mut range = (f32::INFINITY, f32::NEG_INFINITY);
+        for c in &self.channels {
+            if let (Some(first), Some(last)) = (c.times.first(), c.times.last()) {
+                range = (range.0.min(*first), range.1.max(*last));
+            }
+        }
+        if range.0.is_finite() { range } else { (0.0, 0.0) }
+    }
+}
+
+/// Per-vertex skinning influences in compressed rows: vertex `v` has joints
+/// `joints[offsets[v]..offsets[v + 1]]` with `weights[...]`, in the order the file
+/// lists them (zero weights dropped).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Influences {
+    pub offsets: Vec<u32>,
+    pub joints: Vec<u16>,
+    pub weights: Vec<f32>,
+}
+
+impl Influences {
+    /// An empty table, ready for [`Influences::push_row`].
+    pub fn new() -> Self {
+        Self { offsets: vec![0], joints: Vec::new(), weights: Vec::new() }
+    }
+
+    /// Appends one vertex's influences.
+    pub fn push_row(&mut self, row: impl IntoIterator<Item = (u16, f32)>) {
+        for (j, w) in row {
+            self.joints.push(j);
+            self.weights.push(w);
+        }
+        self.offsets.push(self.joints.len() as u32);
+    }
+
+    pub fn vertex_count(&self) -> usize {
+        self.offsets.len() - 1
+    }
+
+    /// The `(joint, weight)` pairs of vertex `v`.
+    pub fn of(&self, v: usize) -> impl Iterator<Item = (usize, f32)> + '_ {
+        let range = self.offsets[v] as usize..self.offsets[v + 1] as usize;
+        self.joints[range.clone()].iter().map(|&j| j as usize).zip(self.weights[range].iter().copied())
+    }
+
+    /// The largest number of influences of any vertex.
+    pub fn max_influences(&self) -> usize {
+        self.offsets.windows(2).map(|w| (w[1] - w[0]) as usize).max().unwrap_or(0)
+    }
+
+    /// The joint with the largest weight on `v`; ties go to the lower joint index.
+    pub fn dominant_joint(&self, v: usize) -> usize {
+        let mut best = (usize::MAX, f32::NEG_INFINITY);
+        for (j, w) in self.of(v) {
+            if w > best.1 || (w == best.1 && j < best.0) {
+                best = (j, w);
+            }
+        }
+        best.0
+    }
+}
+
+/// The skinned mesh: one triangle list over split vertices, with their attributes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SkinnedMesh {
+    pub name: String,
+    /// Bind-pose positions, in the file's units.
+    pub positions: Vec<[f32; 3]>,
+    pub normals: Option<Vec<[f32; 3]>>,
+    /// `TEXCOORD_0`.
+    pub uvs: Option<Vec<[f32; 2]>>,
+    pub influences: Influences,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl SkinnedMesh {
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+}
+
+/// A skinned rig: the scene graph, the skin, the animations and the one skinned mesh.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rig {
+    pub nodes: Vec<Node>,
+    /// Root nodes of each scene.
+    pub scenes: Vec<Vec<usize>>,
+    /// The scene shown by default.
+    pub scene: Option<usize>,
+    /// The node that carries the skinned mesh.
+    pub mesh_node: usize,
+    pub skin: Skin,
+    pub animations: Vec<Animation>,
+    pub mesh: SkinnedMesh,
+}
+
+impl Rig {
+    /// The parent of every node (`None` for roots).
+    pub fn parents(&self) -> Vec<Option<usize>> {
+        let mut parents = vec![None; self.nodes.len()];
+        for (n, node) in self.nodes.iter().enumerate() {
+            for &c in &node.children {
+                parents[c] = Some(n);
+            }
+        }
+        parents
+    }
+
+    /// The parent *joint* of every joint: the nearest ancestor node that is a joint.
+    pub fn joint_parents(&self) -> Vec<Option<usize>> {
+        let parents = self.parents();
+        let mut joint_of_node = vec![None; self.nodes.len()];
+        for (j, &n) in self.skin.joints.iter().enumerate() {
+            joint_of_node[n] = Some(j);
+        }
+        self.skin
+            .joints
+            .iter()
+            .map(|&n| {
+                let mut current = parents[n];
+                while let Some(p) = current {
+                    if let Some(j) = joint_of_node[p] {
+                        return Some(j);
+                    }
+                    current = parents[p];
+                }
+                None
+            })
+            .collect()
+    }
+
+    /// A joint's name: its node's name, or `joint<j>`.
+    pub fn joint_name(&self, joint: usize) -> String {
+        self.nodes[self.skin.joints[joint]].name.clone().unwrap_or_else(|| format!("joint{joint}"))
+    }
+}

@@ -1,0 +1,296 @@
+//! The simplified rig: the input rig with its skinned mesh replaced by the simplified
+//! one. The skeleton, inverse bind matrices and animations are the input's, unchanged.
+//!
+//! Index spaces: `simp` indexes the simplified mesh (stage 3/4's output), `welded` the
+//! pose set the pipeline ran on ([`crate::weld`]), `split` the input mesh's own
+//! vertices, and `out` the written mesh's vertices.
+//!
+//! The story of [`simplified_rig`]:
+//! 1. Each simplified face picks, for each corner, a split copy of its welded vertex: the
+//!    copies whose attributes lie closest together ([`pick_copies`]). On a seam, the faces
+//!    on each side pick that side's copy, so the seam stays a seam in the output: one
+//!    output vertex per (simplified vertex, copy) used.
+//! 2. Attributes (UV, normal) come from the copy.
+//! 3. Subset placement: the copy's own bind position and exact joints and weights.
+//!    Optimal placement: the new position, and weights refitted by least squares over the
+//!    pose set ([`crate::refit`]) on the joints of the mapped vertex and its neighbours,
+//!    unless the mapped vertex's own (4 largest) weights fit better.
+
+use desal_mesh::math::Mat4;
+use desal_mesh::{Face, Vec3};
+
+use crate::RigError;
+use crate::model::{Influences, Rig, SkinnedMesh};
+use crate::refit::{MAX_INFLUENCES, fit_weights, residual};
+use crate::weld::Weld;
+
+/// The simplified mesh and how it was placed, as stages 3 and 4 give it.
+#[derive(Debug, Clone, Copy)]
+pub struct SimplifiedInput<'a> {
+    /// Bind-pose positions of the simplified vertices (`simp` space).
+    pub positions: &'a [Vec3],
+    /// Triangles over `simp`.
+    pub faces: &'a [Face],
+    /// `simp_to_welded[simp]`: the welded vertex stage 4 mapped it to.
+    pub simp_to_welded: &'a [u32],
+    /// True when every simplified vertex is a welded input vertex (subset placement).
+    pub subset: bool,
+}
+
+/// What the refit needs: the pose set's skinning matrices and targets.
+#[derive(Debug, Clone, Copy)]
+pub struct PoseTargets<'a> {
+    /// `joints[k][j]`: joint `j`'s skinning matrix in pose `k`.
+    pub joints: &'a [Vec<Mat4>],
+    /// `positions[k][welded]`: welded vertex positions in pose `k`.
+    pub positions: &'a [Vec<Vec3>],
+}
+
+/// Figures of [`simplified_rig`].
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SimplifiedReport {
+    pub simplified_vertices: usize,
+    /// Vertices written: simplified vertices plus their extra seam copies.
+    pub output_vertices: usize,
+    pub output_faces: usize,
+    /// Simplified vertices written more than once (they lie on a UV or normal seam).
+    pub seam_vertices: usize,
+    /// Optimal placement: vertices whose weights were refitted (the rest kept the mapped
+    /// vertex's own weights, which fitted better).
+    pub refitted_vertices: usize,
+    pub max_influences: usize,
+    /// Faces whose corners have no copies in one UV chart (the simplification collapsed
+    /// across a seam there), so their texture is stretched across the seam.
+    pub cross_chart_faces: usize,
+}
+
+/// Builds the simplified rig. `weld` is the weld of `rig.mesh` the pipeline ran on.
+pub fn simplified_rig(
+    rig: &Rig,
+    weld: &Weld,
+    simplified: &SimplifiedInput,
+    targets: &PoseTargets,
+) -> Result<(Rig, SimplifiedReport), RigError> {
+    check_input(weld, simplified)?;
+    let mesh = &rig.mesh;
+
+    // 1. A copy per corner, and one output vertex per (simp, copy) in order of first use.
+    let mut out_index: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+    let mut out_vertices: Vec<(u32, u32)> = Vec::new();
+    let mut triangles = Vec::with_capacity(simplified.faces.len());
+    let charts = uv_charts(mesh);
+    let mut cross_chart_faces = 0;
+    for face in simplified.faces {
+        let copies =
+            pick_copies(mesh, face.map(|s| weld.copies_of(simplified.simp_to_welded[s as usize] as usize)));
+        if let Some(charts) = &charts {
+            cross_chart_faces +=
+                usize::from(copies.iter().any(|&c| charts[c as usize] != charts[copies[0] as usize]));
+        }
+        let mut corners = [0u32; 3];
+        for ((corner, &s), copy) in corners.iter_mut().zip(face).zip(copies) {
+            *corner = *out_index.entry((s, copy)).or_insert_with(|| {
+                out_vertices.push((s, copy));
+                (out_vertices.len() - 1) as u32
+            });
+        }
+        triangles.push(corners);
+    }
+
+    // 3. Influences per simplified vertex (the same for all its copies).
+    let simp_count = simplified.positions.len();
+    let mut simp_weights: Vec<Option<Vec<(u16, f32)>>> = vec![None; simp_count];
+    let mut refitted = 0;
+    if !simplified.subset {
+        let neighbours = welded_neighbours(weld);
+        for (s, slot) in simp_weights.iter_mut().enumerate() {
+            let welded = simplified.simp_to_welded[s] as usize;
+            let (weights, was_refitted) =
+                refit_vertex(mesh, weld, &neighbours, welded, &simplified.positions[s], targets);
+            refitted += usize::from(was_refitted);
+            *slot = Some(weights);
+        }
+    }
+
+    // 2. Attributes from the copy; positions and influences by placement.
+    let mut influences = Influences::new();
+    let mut positions = Vec::with_capacity(out_vertices.len());
+    let mut normals = mesh.normals.as_ref().map(|_| Vec::with_capacity(out_vertices.len()));
+    let mut uvs = mesh.uvs.as_ref().map(|_| Vec::with_capacity(out_vertices.len()));
+    for &(s, copy) in &out_vertices {
+        let copy = copy as usize;
+        if simplified.subset {
+            positions.push(mesh.positions[copy]);
+            influences.push_row(mesh.influences.of(copy).map(|(j, w)| (j as u16, w)));
+        } else {
+            let p = simplified.positions[s as usize];
+            positions.push([p.x as f32, p.y as f32, p.z as f32]);
+            influences.push_row(simp_weights[s as usize].clone().expect("fitted above"));
+        }
+        if let (Some(out), Some(input)) = (&mut normals, &mesh.normals) {
+            out.push(input[copy]);
+        }
+        if let (Some(out), Some(input)) = (&mut uvs, &mesh.uvs) {
+            out.push(input[copy]);
+        }
+    }
+    let mut used = vec![0u32; simp_count];
+    for &(s, _) in &out_vertices {
+        used[s as usize] += 1;
+    }
+    let report = SimplifiedReport {
+        simplified_vertices: simp_count,
+        output_vertices: out_vertices.len(),
+        output_faces: triangles.len(),
+        seam_vertices: used.iter().filter(|&&n| n > 1).count(),
+        refitted_vertices: refitted,
+        max_influences: influences.max_influences(),
+        cross_chart_faces,
+    };
+    let out_mesh = SkinnedMesh { name: mesh.name.clone(), positions, normals, uvs, influences, triangles };
+    let mut out = rig.clone();
+    out.mesh = out_mesh;
+    Ok((out, report))
+}
+
+fn check_input(weld: &Weld, s: &SimplifiedInput) -> Result<(), RigError> {
+    if s.simp_to_welded.len() != s.positions.len() {
+        return Err(RigError::Output(format!(
+            "{} mapped vertices for {} simplified vertices",
+            s.simp_to_welded.len(),
+            s.positions.len()
+        )));
+    }
+    if let Some(w) = s.simp_to_welded.iter().find(|&&w| w as usize >= weld.welded_count()) {
+        return Err(RigError::Output(format!(
+            "mapped to vertex {w}, but the rig has {} welded vertices",
+            weld.welded_count()
+        )));
+    }
+    if let Some(f) = s.faces.iter().position(|f| f.iter().any(|&v| v as usize >= s.positions.len())) {
+        return Err(RigError::Output(format!("face {f} uses a vertex out of range")));
+    }
+    Ok(())
+}
+
+/// The split copies of a face's three corners whose attributes (UV, normal) lie
+/// closest together: the least sum of squared attribute distances over the face's three
+/// edges, ties to the lower split indices. A face on one side of a seam has all its
+/// corners' copies on that side close together; a copy from the other side would stretch
+/// the face across the texture.
+fn pick_copies(mesh: &SkinnedMesh, copies: [&[u32]; 3]) -> [u32; 3] {
+    if copies.iter().all(|c| c.len() == 1) {
+        return copies.map(|c| c[0]);
+    }
+    let attribute_distance = |a: u32, b: u32| -> f64 {
+        let (a, b) = (a as usize, b as usize);
+        let mut d = 0.0;
+        if let Some(uvs) = &mesh.uvs {
+            d += (0..2).map(|i| f64::from(uvs[a][i] - uvs[b][i]).powi(2)).sum::<f64>();
+        }
+        if let Some(normals) = &mesh.normals {
+            d += (0..3).map(|i| f64::from(normals[a][i] - normals[b][i]).powi(2)).sum::<f64>();
+        }
+        d
+    };
+    let mut best = (f64::INFINITY, copies.map(|c| c[0]));
+    for &a in copies[0] {
+        for &b in copies[1] {
+            for &c in copies[2] {
+                let d = attribute_distance(a, b) + attribute_distance(b, c) + attribute_distance(c, a);
+                if d < best.0 {
+                    best = (d, [a, b, c]);
+                }
+            }
+        }
+    }
+    best.1
+}
+
+/// The UV chart of every split vertex: connected components of the split mesh (`None`
+/// without UVs).
+fn uv_charts(mesh: &SkinnedMesh) -> Option<Vec<u32>> {
+    mesh.uvs.as_ref()?;
+    let mut parent: Vec<u32> = (0..mesh.vertex_count() as u32).collect();
+    fn find(parent: &mut [u32], mut v: u32) -> u32 {
+        while parent[v as usize] != v {
+            parent[v as usize] = parent[parent[v as usize] as usize];
+            v = parent[v as usize];
+        }
+        v
+    }
+    for t in &mesh.triangles {
+        for i in 0..2 {
+            let (a, b) = (find(&mut parent, t[i]), find(&mut parent, t[i + 1]));
+            let (lo, hi) = (a.min(b), a.max(b));
+            parent[hi as usize] = lo;
+        }
+    }
+    Some((0..mesh.vertex_count() as u32).map(|v| find(&mut parent, v)).collect())
+}
+
+/// The welded 1-ring of every welded vertex, ascending.
+fn welded_neighbours(weld: &Weld) -> Vec<Vec<u32>> {
+    let mut rings = vec![Vec::new(); weld.welded_count()];
+    for f in &weld.faces {
+        for i in 0..3 {
+            rings[f[i] as usize].push(f[(i + 1) % 3]);
+            rings[f[i] as usize].push(f[(i + 2) % 3]);
+        }
+    }
+    for r in &mut rings {
+        r.sort_unstable();
+        r.dedup();
+    }
+    rings
+}
+
+/// Weights for a vertex at `x` mapped to `welded`: the refit over the joints of `welded`
+/// and its ring, or `welded`'s own four largest weights when they fit better. Returns
+/// the weights and whether they are the refit.
+fn refit_vertex(
+    mesh: &SkinnedMesh,
+    weld: &Weld,
+    neighbours: &[Vec<u32>],
+    welded: usize,
+    x: &Vec3,
+    targets: &PoseTargets,
+) -> (Vec<(u16, f32)>, bool) {
+    let representative = weld.copies_of(welded)[0] as usize;
+    let mut candidates: Vec<usize> = mesh.influences.of(representative).map(|(j, _)| j).collect();
+    for &n in &neighbours[welded] {
+        candidates.extend(mesh.influences.of(weld.copies_of(n as usize)[0] as usize).map(|(j, _)| j));
+    }
+    candidates.sort_unstable();
+    candidates.dedup();
+    let y: Vec<Vec3> = targets.positions.iter().map(|p| p[welded]).collect();
+    let own =
+        largest_normalised(mesh.influences.of(representative).map(|(j, w)| (j, f64::from(w))).collect());
+    let own_residual = residual(x, &own, targets.joints, &y);
+    let (weights, refitted) = match fit_weights(x, &candidates, targets.joints, &y) {
+        Some((fit, r)) if r < own_residual => (fit, true),
+        _ => (own, false),
+    };
+    (to_f32_weights(&weights), refitted)
+}
+
+/// The `MAX_INFLUENCES` largest weights, renormalised.
+fn largest_normalised(mut weights: Vec<(usize, f64)>) -> Vec<(usize, f64)> {
+    weights.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    weights.truncate(MAX_INFLUENCES);
+    weights.sort_by_key(|w| w.0);
+    let total: f64 = weights.iter().map(|w| w.1).sum();
+    weights.iter().map(|&(j, w)| (j, w / total)).collect()
+}
+
+/// `f32` weights whose `f32` sum is as close to 1 as rounding allows: the largest takes
+/// the remainder.
+pub fn to_f32_weights(weights: &[(usize, f64)]) -> Vec<(u16, f32)> {
+    let mut out: Vec<(u16, f32)> =
+        weights.iter().map(|&(j, w)| (j as u16, w as f32)).filter(|w| w.1 > 0.0).collect();
+    if let Some(largest) = (0..out.len()).max_by(|&a, &b| out[a].1.total_cmp(&out[b].1).then(b.cmp(&a))) {
+        let rest: f32 = out.iter().enumerate().filter(|(i, _)| *i != largest).map(|(_, w)| w.1).sum();
+        out[largest].1 = 1.0 - rest;
+    }
+    out
+}

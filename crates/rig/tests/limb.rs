@@ -1,0 +1,453 @@
+//! A hand-made two-joint limb (a tube bent at its middle joint) whose UV layout has a
+//! seam along the limb (where the unwrap closes) and one across it (two charts, upper
+//! and lower), so every seam case of the weld and of the output is met: the round trip
+//! through a `.glb`, welding, posing by LBS, part labels, the simplified rig with seams
+//! kept (subset and optimal placement) and every refused input.
+
+#![allow(clippy::needless_range_loop)] // Index loops read as the rings and segments they build.
+
+use std::path::Path;
+
+use desal_mesh::{EdgeTopology, TriMesh, Vec3};
+use desal_rig::model::{Path as ChannelPath, SkinnedMesh};
+use desal_rig::pose::{animated_locals, sample_channel};
+use desal_rig::{
+    Animation, Channel, FrameConfig, Influences, Interpolation, LocalTransform, Node, PartsConfig,
+    PoseSource, PoseTargets, ReadOptions, Rig, RigError, SimplifiedInput, Skin, dominant_joint_parts,
+    joint_matrices, pose_rig, read_rig_from, sample_frames, simplified_rig, skin_points, write_glb,
+};
+
+/// Rings along the limb (y from 0 to 2) and segments around it.
+const RINGS: usize = 17;
+const SEGMENTS: usize = 12;
+/// The ring at the joint (y = 1), where the upper and lower charts meet.
+const MID: usize = RINGS / 2;
+
+fn ring_y(r: usize) -> f32 {
+    2.0 * r as f32 / (RINGS - 1) as f32
+}
+
+/// The limb: joint 0 "upper" at the origin, joint 1 "lower" at y = 1 (its child); the
+/// mesh node is a separate root. One animation bends the lower joint 90° about z over
+/// one second.
+fn limb() -> Rig {
+    let mut positions = Vec::new();
+    let mut uvs = Vec::new();
+    let mut influences = Influences::new();
+    // Split vertices: chart 0 holds rings 0..=MID, chart 1 rings MID..RINGS; each ring has
+    // SEGMENTS + 1 columns, the last repeating the first with u = 1.
+    let mut index = vec![vec![[0u32; 2]; SEGMENTS + 1]; RINGS];
+    for chart in 0..2 {
+        let rings = if chart == 0 { 0..=MID } else { MID..=RINGS - 1 };
+        for r in rings {
+            for s in 0..=SEGMENTS {
+                let angle = std::f32::consts::TAU * (s % SEGMENTS) as f32 / SEGMENTS as f32;
+                let y = ring_y(r);
+                positions.push([0.2 * angle.cos(), y, 0.2 * angle.sin()]);
+                let v = if chart == 0 { 0.5 * y / 2.0 } else { 0.55 + 0.45 * (y - 1.0) };
+                uvs.push([s as f32 / SEGMENTS as f32, v]);
+                let t = ((y - 0.7) / 0.6).clamp(0.0, 1.0);
+                let lower = t * t * (3.0 - 2.0 * t);
+                let row: Vec<(u16, f32)> =
+                    [(0, 1.0 - lower), (1, lower)].into_iter().filter(|w| w.1 > 0.0).collect();
+                influences.push_row(row);
+                index[r][s][chart] = (positions.len() - 1) as u32;
+            }
+        }
+    }
+    let mut triangles = Vec::new();
+    for r in 0..RINGS - 1 {
+        let chart = usize::from(r >= MID);
+        for s in 0..SEGMENTS {
+            let (a, b) = (index[r][s][chart], index[r][s + 1][chart]);
+            let (c, d) = (index[r + 1][s][chart], index[r + 1][s + 1][chart]);
+            triangles.push([a, c, b]);
+            triangles.push([b, c, d]);
+        }
+    }
+    let normals = Some(
+        positions
+            .iter()
+            .map(|p| {
+                let n = (p[0] * p[0] + p[2] * p[2]).sqrt();
+                [p[0] / n, 0.0, p[2] / n]
+            })
+            .collect(),
+    );
+    let mesh = SkinnedMesh { name: "limb".into(), positions, normals, uvs: Some(uvs), influences, triangles };
+    let mut lower_ibm = identity();
+    lower_ibm[13] = -1.0;
+    let quarter = std::f32::consts::FRAC_PI_4.sin();
+    Rig {
+        nodes: vec![
+            Node { name: Some("upper".into()), children: vec![1], transform: LocalTransform::IDENTITY },
+            Node {
+                name: Some("lower".into()),
+                children: vec![],
+                transform: LocalTransform::Trs {
+                    translation: [0.0, 1.0, 0.0],
+                    rotation: [0.0, 0.0, 0.0, 1.0],
+                    scale: [1.0; 3],
+                },
+            },
+            Node { name: Some("body".into()), children: vec![], transform: LocalTransform::IDENTITY },
+        ],
+        scenes: vec![vec![0, 2]],
+        scene: Some(0),
+        mesh_node: 2,
+        skin: Skin {
+            name: Some("skin".into()),
+            joints: vec![0, 1],
+            inverse_bind: vec![identity(), lower_ibm],
+            skeleton: Some(0),
+        },
+        animations: vec![Animation {
+            name: Some("bend".into()),
+            channels: vec![Channel {
+                node: 1,
+                path: ChannelPath::Rotation,
+                interpolation: Interpolation::Linear,
+                times: vec![0.0, 1.0],
+                values: vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0, quarter, quarter],
+            }],
+        }],
+        mesh,
+    }
+}
+
+fn identity() -> [f32; 16] {
+    let mut m = [0.0; 16];
+    for i in 0..4 {
+        m[5 * i] = 1.0;
+    }
+    m
+}
+
+fn read(bytes: &[u8]) -> Result<Rig, RigError> {
+    read_rig_from(Path::new("limb.glb"), bytes, &ReadOptions::default())
+}
+
+#[test]
+fn a_rig_survives_a_round_trip_through_glb_bit_for_bit() {
+    let rig = limb();
+    let bytes = write_glb(&rig).unwrap();
+    let back = read(&bytes).unwrap();
+    assert_eq!(back, rig);
+    // Same rig, same bytes.
+    assert_eq!(write_glb(&back).unwrap(), bytes);
+}
+
+#[test]
+fn the_weld_closes_both_seams_and_keeps_only_the_ends_open() {
+    let rig = limb();
+    let posed = pose_rig(&rig, &[]).unwrap();
+    // Split: two charts of (rings) x (SEGMENTS + 1); welded: one vertex per ring and segment.
+    assert_eq!(rig.mesh.vertex_count(), (RINGS + 1) * (SEGMENTS + 1));
+    assert_eq!(posed.weld.welded_count(), RINGS * SEGMENTS);
+    let topology = EdgeTopology::new(&posed.weld.faces);
+    // Only the two end rings are open: the seams are neither cracks nor boundaries.
+    assert_eq!(topology.boundary_edge_count(), 2 * SEGMENTS);
+    assert_eq!(topology.non_manifold_edge_count(), 0);
+    // Split mesh, for contrast: both seams are boundaries.
+    let split = EdgeTopology::new(&rig.mesh.triangles);
+    assert_eq!(split.boundary_edge_count(), 2 * SEGMENTS + 2 * (RINGS - 1) + 2 * SEGMENTS);
+}
+
+#[test]
+fn animation_frames_bend_the_lower_limb_by_slerp() {
+    let rig = limb();
+    let config = FrameConfig { source: PoseSource::Animations, frames: 3, ..FrameConfig::default() };
+    let frames = sample_frames(&rig, &config, Path::new("limb.glb")).unwrap();
+    assert_eq!(frames.len(), 3);
+    let posed = pose_rig(&rig, &frames).unwrap();
+    assert_eq!(posed.poses.pose_count(), 4);
+    assert_eq!(posed.poses.names[0], "bind");
+    // Bind pose and frame 0 (no bend) agree.
+    for (p, q) in posed.poses.poses[0].iter().zip(&posed.poses.poses[1]) {
+        // Not bit-equal: the f32 weights sum to 1 only up to rounding.
+        assert!((p - q).norm() < 1e-6);
+    }
+    // The tip ring is weighted to "lower" only: at t = 1 it has turned 90° about z around
+    // (0, 1, 0), so (x, y, z) goes to (-(y - 1), 1 + x, z).
+    let tip = posed.poses.poses[0].len() - SEGMENTS;
+    for v in tip..tip + SEGMENTS {
+        let p = posed.poses.poses[0][v];
+        let expected = Vec3::new(-(p.y - 1.0), 1.0 + p.x, p.z);
+        assert!((posed.poses.poses[3][v] - expected).norm() < 1e-6, "{v}");
+    }
+    // At t = 0.5 slerp gives exactly 45°.
+    let q = sample_channel(&rig.animations[0].channels[0], 0.5);
+    assert!((q[3] - (std::f64::consts::PI / 8.0).cos()).abs() < 1e-7, "{q:?}");
+    let locals = animated_locals(&rig, &rig.animations[0], 0.5);
+    let m = joint_matrices(&rig, &locals);
+    let tip_rest = posed.poses.poses[0][tip];
+    let moved = desal_rig::pose::transform_point(&m[1], &tip_rest);
+    let angle = ((moved - Vec3::new(0.0, 1.0, 0.0))
+        .normalize()
+        .dot(&(tip_rest - Vec3::new(0.0, 1.0, 0.0)).normalize()))
+    .acos();
+    assert!((angle.to_degrees() - 45.0).abs() < 1e-4, "{}", angle.to_degrees());
+}
+
+#[test]
+fn random_frames_are_seeded_and_stay_within_the_limit() {
+    let rig = limb();
+    let config = FrameConfig { source: PoseSource::Random, frames: 20, seed: 7, max_degrees: 25.0 };
+    let a = sample_frames(&rig, &config, Path::new("limb.glb")).unwrap();
+    let b = sample_frames(&rig, &config, Path::new("limb.glb")).unwrap();
+    let c = sample_frames(&rig, &FrameConfig { seed: 8, ..config }, Path::new("limb.glb")).unwrap();
+    assert_eq!(format!("{:?}", a[5].locals), format!("{:?}", b[5].locals));
+    assert_ne!(format!("{:?}", a[5].locals), format!("{:?}", c[5].locals));
+    let mut largest: f64 = 0.0;
+    for frame in &a {
+        for &node in &rig.skin.joints {
+            if let desal_rig::pose::LocalPose::Trs { rotation, .. } = frame.locals[node] {
+                largest = largest.max(rotation.angle().to_degrees());
+            }
+        }
+    }
+    assert!(largest <= 25.0 + 1e-9 && largest > 15.0, "{largest}");
+    // "both" is the animation frames then the random ones.
+    let both =
+        sample_frames(&rig, &FrameConfig { source: PoseSource::Both, ..config }, Path::new("x")).unwrap();
+    assert_eq!(both.len(), 40);
+}
+
+#[test]
+fn dominant_joint_parts_split_the_limb_at_its_joint() {
+    let rig = limb();
+    let posed = pose_rig(&rig, &[]).unwrap();
+    let labels = dominant_joint_parts(&rig, &posed.influences, &PartsConfig { min_part_vertices: 50 });
+    assert_eq!(labels.names, ["upper", "lower"]);
+    let y = |v: usize| posed.poses.poses[0][v].y;
+    for v in 0..labels.vertex_count() {
+        // The blend is symmetric about y = 1; the tie at y = 1 goes to the lower joint index.
+        let expected = u32::from(y(v) > 1.0 + 1e-6);
+        assert_eq!(labels.labels[v], expected, "vertex {v} at y = {}", y(v));
+    }
+    // A part below the minimum joins its parent.
+    let merged = dominant_joint_parts(&rig, &posed.influences, &PartsConfig { min_part_vertices: 150 });
+    assert_eq!(merged.names, ["upper"]);
+}
+
+/// Simplifies the welded limb to `target` vertices with stage 3 and maps it with stage 4.
+fn simplify_limb(
+    rig: &Rig,
+    placement: desal_simplify::Placement,
+    target: usize,
+) -> (desal_rig::PosedRig, TriMesh, Vec<u32>) {
+    let config = FrameConfig { source: PoseSource::Both, frames: 6, seed: 1, max_degrees: 30.0 };
+    let frames = sample_frames(rig, &config, Path::new("limb.glb")).unwrap();
+    let posed = pose_rig(rig, &frames).unwrap();
+    let template = posed.poses.template_mesh();
+    let simplify_config = desal_simplify::SimplifyConfig {
+        target: desal_simplify::Target::Vertices(target),
+        placement,
+        ..desal_simplify::SimplifyConfig::default()
+    };
+    let simplified =
+        desal_simplify::simplify(&desal_simplify::SimplifyInput::new(&template), &simplify_config).unwrap();
+    let labels = desal_mesh::PartLabels::from_ids(vec![0; template.vertex_count()]);
+    let mode = match simplified.subset_indices() {
+        Some(_) => "subset",
+        None => "greedy",
+    };
+    let kept = simplified.subset_indices();
+    let map_mode = match (&kept, mode) {
+        (Some(k), "subset") => desal_map::MapMode::Subset { kept_orig: k },
+        _ => desal_map::MapMode::Greedy,
+    };
+    let mapped = desal_map::map_pose_set(
+        &desal_map::MapConfig::default(),
+        map_mode,
+        &simplified.mesh,
+        &posed.poses,
+        &labels,
+    )
+    .unwrap();
+    (posed, simplified.mesh, mapped.map.simp_to_orig)
+}
+
+/// The chart of a UV: 0 (upper, v <= 0.5) or 1 (lower, v >= 0.55).
+fn chart(uv: [f32; 2]) -> u8 {
+    assert!(uv[1] <= 0.5 || uv[1] >= 0.55, "{uv:?} lies between the charts");
+    u8::from(uv[1] >= 0.55)
+}
+
+#[test]
+fn the_simplified_limb_keeps_its_uv_seams_and_exact_weights_with_subset_placement() {
+    let rig = limb();
+    let (posed, mesh, simp_to_welded) = simplify_limb(&rig, desal_simplify::Placement::Subset, 60);
+    let input = SimplifiedInput {
+        positions: &mesh.positions,
+        faces: &mesh.faces,
+        simp_to_welded: &simp_to_welded,
+        subset: true,
+    };
+    let targets = PoseTargets { joints: &posed.joints, positions: &posed.poses.poses };
+    let (out, report) = simplified_rig(&rig, &posed.weld, &input, &targets).unwrap();
+    assert_eq!(report.simplified_vertices, mesh.vertex_count());
+    assert_eq!(report.output_faces, mesh.face_count());
+    // Both seams survive: vertices on them are written once per side.
+    assert!(report.seam_vertices > 0 && report.output_vertices > report.simplified_vertices, "{report:?}");
+    let uvs = out.mesh.uvs.as_ref().unwrap();
+    let split_uvs = rig.mesh.uvs.as_ref().unwrap();
+    let mut straddling = 0;
+    for (f, t) in out.mesh.triangles.iter().enumerate() {
+        let corners = t.map(|v| uvs[v as usize]);
+        // One chart per face whenever the corners' copies allow it: a face that the
+        // simplification stretched across the seam ring (corners only in the upper chart
+        // and only in the lower one) cannot be helped here, and is counted.
+        let charts_of = |c: usize| -> Vec<u8> {
+            let welded = simp_to_welded[mesh.faces[f][c] as usize] as usize;
+            posed.weld.copies_of(welded).iter().map(|&s| chart(split_uvs[s as usize])).collect()
+        };
+        let common = (0..2u8).any(|k| (0..3).all(|c| charts_of(c).contains(&k)));
+        if common {
+            assert!(corners.iter().all(|&uv| chart(uv) == chart(corners[0])), "face {f}: {corners:?}");
+        } else {
+            straddling += 1;
+        }
+        let us = corners.map(|uv| uv[0]);
+        let span = us.iter().cloned().fold(f32::MIN, f32::max) - us.iter().cloned().fold(f32::MAX, f32::min);
+        assert!(span < 0.5, "face {f} crosses the wrap seam: {corners:?}");
+    }
+    assert_eq!(straddling, report.cross_chart_faces, "{report:?}");
+    // Every written vertex is a split input vertex: same position, weights and attributes.
+    for v in 0..out.mesh.vertex_count() {
+        let same = (0..rig.mesh.vertex_count()).any(|s| {
+            rig.mesh.positions[s] == out.mesh.positions[v]
+                && rig.mesh.uvs.as_ref().unwrap()[s] == uvs[v]
+                && rig.mesh.influences.of(s).eq(out.mesh.influences.of(v))
+        });
+        assert!(same, "output vertex {v} is not an input vertex");
+    }
+    // Skeleton, inverse bind matrices and animations are the input's.
+    assert_eq!((&out.nodes, &out.skin, &out.animations), (&rig.nodes, &rig.skin, &rig.animations));
+    // And it is a file the reader takes back.
+    let back = read(&write_glb(&out).unwrap()).unwrap();
+    assert_eq!(back, out);
+}
+
+#[test]
+fn optimal_placement_refits_at_most_four_normalised_weights() {
+    let rig = limb();
+    let (posed, mesh, simp_to_welded) = simplify_limb(&rig, desal_simplify::Placement::Optimal, 60);
+    let input = SimplifiedInput {
+        positions: &mesh.positions,
+        faces: &mesh.faces,
+        simp_to_welded: &simp_to_welded,
+        subset: false,
+    };
+    let targets = PoseTargets { joints: &posed.joints, positions: &posed.poses.poses };
+    let (out, report) = simplified_rig(&rig, &posed.weld, &input, &targets).unwrap();
+    assert!(report.max_influences <= 4);
+    assert!(report.refitted_vertices > 0, "{report:?}");
+    for v in 0..out.mesh.vertex_count() {
+        let sum: f32 = out.mesh.influences.of(v).map(|(_, w)| w).sum();
+        assert!((sum - 1.0).abs() < 1e-6, "vertex {v}: {sum}");
+        assert!(out.mesh.influences.of(v).all(|(_, w)| w > 0.0));
+    }
+    // The refit is at least as good, over the pose set, as each mapped vertex's own weights.
+    let rest: Vec<Vec3> =
+        out.mesh.positions.iter().map(|p| Vec3::new(p[0].into(), p[1].into(), p[2].into())).collect();
+    let mut own = Influences::new();
+    let mut target_of = Vec::new();
+    let mut seen = std::collections::HashMap::new();
+    for (f, t) in out.mesh.triangles.iter().enumerate() {
+        for (c, &v) in t.iter().enumerate() {
+            seen.entry(v).or_insert(mesh.faces[f][c]);
+        }
+    }
+    for v in 0..out.mesh.vertex_count() as u32 {
+        let welded = simp_to_welded[seen[&v] as usize] as usize;
+        own.push_row(posed.influences.of(welded).map(|(j, w)| (j as u16, w)));
+        target_of.push(welded);
+    }
+    let (mut refit_error, mut own_error) = (0.0, 0.0);
+    for (k, joints) in posed.joints.iter().enumerate() {
+        let a = skin_points(&rest, &out.mesh.influences, joints);
+        let b = skin_points(&rest, &own, joints);
+        for v in 0..rest.len() {
+            let y = posed.poses.poses[k][target_of[v]];
+            refit_error += (a[v] - y).norm_squared();
+            own_error += (b[v] - y).norm_squared();
+        }
+    }
+    assert!(refit_error <= own_error * (1.0 + 1e-6) + 1e-10, "refit {refit_error} vs own {own_error}");
+    read(&write_glb(&out).unwrap()).unwrap();
+}
+
+/// The JSON of a `.glb` edited by `edit`, repacked.
+fn edit_json(bytes: &[u8], edit: impl FnOnce(&mut serde_json::Value)) -> Vec<u8> {
+    let glb = gltf::binary::Glb::from_slice(bytes).unwrap();
+    let mut json: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
+    edit(&mut json);
+    let json = serde_json::to_vec(&json).unwrap();
+    gltf::binary::Glb { header: glb.header, json: json.into(), bin: glb.bin }.to_vec().unwrap()
+}
+
+fn message(result: Result<Rig, RigError>) -> String {
+    result.expect_err("must be refused").to_string()
+}
+
+#[test]
+fn a_mesh_without_a_skin_is_refused() {
+    let bytes = edit_json(&write_glb(&limb()).unwrap(), |j| {
+        j["nodes"][2].as_object_mut().unwrap().remove("skin");
+    });
+    let m = message(read(&bytes));
+    assert!(m.starts_with("limb.glb: no skinned mesh"), "{m}");
+}
+
+#[test]
+fn several_skinned_meshes_are_named_and_mesh_picks_one() {
+    let bytes = edit_json(&write_glb(&limb()).unwrap(), |j| {
+        j["nodes"].as_array_mut().unwrap().push(serde_json::json!({"name": "body2", "mesh": 0, "skin": 0}));
+        j["scenes"][0]["nodes"].as_array_mut().unwrap().push(3.into());
+    });
+    let m = message(read(&bytes));
+    assert!(
+        m.contains("2 skinned meshes ('limb' (node 'body'), 'limb' (node 'body2'))") && m.contains("mesh = "),
+        "{m}"
+    );
+    let picked =
+        read_rig_from(Path::new("limb.glb"), &bytes, &ReadOptions { mesh: Some("body2".into()) }).unwrap();
+    assert_eq!(picked.mesh_node, 3);
+    let m = message(read_rig_from(Path::new("limb.glb"), &bytes, &ReadOptions { mesh: Some("arm".into()) }));
+    assert!(m.contains("no skinned mesh or node is called 'arm'"), "{m}");
+}
+
+#[test]
+fn weights_that_do_not_sum_to_one_are_refused_with_the_vertex() {
+    let mut rig = limb();
+    rig.mesh.influences.weights[7] *= 0.5;
+    let v = rig.mesh.influences.offsets.iter().position(|&o| o > 7).unwrap() - 1;
+    let m = message(read(&write_glb(&rig).unwrap()));
+    assert!(m.contains(&format!("mesh 'limb' vertex {v}: skinning weights sum to")), "{m}");
+}
+
+#[test]
+fn a_joint_the_skin_does_not_have_is_refused() {
+    let mut rig = limb();
+    rig.mesh.influences.joints[0] = 5;
+    let m = message(read(&write_glb(&rig).unwrap()));
+    assert!(m.contains("vertex 0: joint 5 has weight 1, but skin 'skin' has only 2 joints"), "{m}");
+}
+
+#[test]
+fn morph_targets_are_refused() {
+    let bytes = edit_json(&write_glb(&limb()).unwrap(), |j| {
+        j["meshes"][0]["primitives"][0]["targets"] = serde_json::json!([{"POSITION": 0}]);
+    });
+    let m = message(read(&bytes));
+    assert!(m.contains("mesh 'limb' primitive 0 has 1 morph target(s)"), "{m}");
+}
+
+#[test]
+fn poses_from_animations_need_an_animation() {
+    let mut rig = limb();
+    rig.animations.clear();
+    let err = sample_frames(&rig, &FrameConfig::default(), Path::new("limb.glb")).unwrap_err();
+    assert!(err.to_string().starts_with("limb.glb: poses = \"animations\""), "{err}");
+}

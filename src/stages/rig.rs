@@ -1,0 +1,348 @@
+//! Rig datasets (`[dataset.rig]`): a skinned glTF 2.0 file in place of pose files and a
+//! labels file. Ingest reads the rig, samples its frames (the animations, seeded random
+//! joint rotations, or both), poses the welded mesh by linear blend skinning and yields
+//! the same `PoseSetV1` artifact as pose files do (pose 0, the template, is the bind
+//! pose); the labels stage gives each welded vertex its heaviest joint, small parts
+//! merged into the parent (`parts = "dominant-joint"`), as a `LabelsV1`. So fit,
+//! saliency, simplify and map never know the poses came from a rig. `outputs.rs` then
+//! writes `simplified.glb` through [`simplified_glb`].
+//!
+//! Keys: the rig file's bytes (never its path), `desal_rig::VERSION`, and every resolved
+//! parameter below, destructured exhaustively.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use desal_io::ContentHash;
+use desal_io::artifact::{ArtifactKind, LabelsV1, MapV1, PoseSetV1, SimplifiedV1};
+use desal_rig::{FrameConfig, PoseSource, PosedRig, ReadOptions, Rig};
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+
+use crate::cache::{StageKey, canonical_json};
+use crate::stages::ingest::{IngestSummary, LabelsSummary, hash_files};
+use crate::stages::runner::StageOutput;
+
+/// Version of the rig ingest and labels as the driver runs them (with `desal_rig::VERSION`).
+pub const RIG_STAGE_VERSION: u32 = 1;
+
+/// `poses = "animations" | "random" | "both"`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum PosesFrom {
+    #[default]
+    Animations,
+    Random,
+    Both,
+}
+
+/// `parts = "dominant-joint"` (the one labelling a rig has for now).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum RigParts {
+    #[default]
+    DominantJoint,
+}
+
+/// The `[dataset.rig]` table.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RigParams {
+    /// The `.glb` or `.gltf` file (relative to the pipeline file).
+    pub file: String,
+    /// Which skinned mesh, by mesh or node name, when the file has several.
+    #[serde(default)]
+    pub mesh: Option<String>,
+    /// Where the frames come from. Default `animations`.
+    #[serde(default)]
+    pub poses: PosesFrom,
+    /// Frames to sample (per source with `both`). Default 60.
+    #[serde(default = "default_frames")]
+    pub frames: usize,
+    /// Seed of the random joint rotations. Default 0.
+    #[serde(default)]
+    pub seed: u64,
+    /// Largest random turn of a joint from its rest rotation, degrees. Default 30.
+    #[serde(default = "default_max_degrees")]
+    pub max_degrees: f64,
+    /// How part labels are made. Default `dominant-joint`.
+    #[serde(default)]
+    pub parts: RigParts,
+    /// Fewest vertices a joint's part may have before it joins its parent. Default 50.
+    #[serde(default = "default_min_part_vertices")]
+    pub min_part_vertices: usize,
+}
+
+fn default_frames() -> usize {
+    FrameConfig::default().frames
+}
+fn default_max_degrees() -> f64 {
+    FrameConfig::default().max_degrees
+}
+fn default_min_part_vertices() -> usize {
+    desal_rig::PartsConfig::default().min_part_vertices
+}
+
+impl RigParams {
+    /// The frame settings, validated.
+    pub fn frame_config(&self) -> Result<FrameConfig> {
+        if self.frames == 0 {
+            bail!("rig.frames must be at least 1");
+        }
+        if !(self.max_degrees.is_finite() && (0.0..=180.0).contains(&self.max_degrees)) {
+            bail!("rig.max_degrees = {} must lie in 0..=180", self.max_degrees);
+        }
+        let source = match self.poses {
+            PosesFrom::Animations => PoseSource::Animations,
+            PosesFrom::Random => PoseSource::Random,
+            PosesFrom::Both => PoseSource::Both,
+        };
+        Ok(FrameConfig { source, frames: self.frames, seed: self.seed, max_degrees: self.max_degrees })
+    }
+
+    pub fn parts_config(&self) -> Result<desal_rig::PartsConfig> {
+        if self.min_part_vertices < 3 {
+            bail!("rig.min_part_vertices must be at least 3 (a part needs a rigid fit)");
+        }
+        Ok(desal_rig::PartsConfig { min_part_vertices: self.min_part_vertices })
+    }
+}
+
+/// A rig dataset's input: the resolved file and its table.
+#[derive(Debug, Clone, Copy)]
+pub struct RigInput<'a> {
+    pub file: &'a Path,
+    pub params: &'a RigParams,
+}
+
+/// A rig dataset's input, owned (kept with the stages' results for the outputs).
+#[derive(Debug, Clone)]
+pub struct RigSource {
+    pub file: PathBuf,
+    pub params: RigParams,
+}
+
+impl RigInput<'_> {
+    pub fn to_owned(&self) -> RigSource {
+        RigSource { file: self.file.to_owned(), params: self.params.clone() }
+    }
+
+    fn file_hash(&self) -> Result<ContentHash> {
+        Ok(hash_files(&[self.file.to_owned()])?[0])
+    }
+
+    /// The ingest key: the rig's bytes and every setting that shapes the pose set.
+    pub fn ingest_key(&self) -> Result<StageKey> {
+        let FrameConfig { source, frames, seed, max_degrees } = self.params.frame_config()?;
+        let resolved = canonical_json(&json!({
+            "mesh": self.params.mesh,
+            "source": format!("{source:?}"),
+            "frames": frames,
+            "seed": seed,
+            "max_degrees": max_degrees,
+            "rig_version": desal_rig::VERSION,
+        }));
+        Ok(StageKey {
+            stage: "rig-ingest".into(),
+            stage_version: RIG_STAGE_VERSION,
+            format_version: ArtifactKind::PoseSet.current_version(),
+            parameters: canonical_json(self.params),
+            resolved,
+            inputs: vec![("rig".into(), self.file_hash()?)],
+        })
+    }
+
+    /// The labels key: the rig's bytes, the pose set, the part settings.
+    pub fn labels_key(&self, poses: ContentHash) -> Result<StageKey> {
+        let desal_rig::PartsConfig { min_part_vertices } = self.params.parts_config()?;
+        Ok(StageKey {
+            stage: "rig-labels".into(),
+            stage_version: RIG_STAGE_VERSION,
+            format_version: ArtifactKind::Labels.current_version(),
+            parameters: canonical_json(
+                &json!({"parts": self.params.parts, "min_part_vertices": min_part_vertices}),
+            ),
+            resolved: canonical_json(&json!({
+                "parts": "dominant-joint",
+                "min_part_vertices": min_part_vertices,
+                "rig_version": desal_rig::VERSION,
+            })),
+            inputs: vec![("rig".into(), self.file_hash()?), ("poses".into(), poses)],
+        })
+    }
+
+    pub fn hints(&self) -> Vec<(String, String)> {
+        vec![("rig".into(), crate::stages::ingest::file_name(self.file))]
+    }
+
+    /// Reads the rig and poses it at its frames.
+    pub fn load(&self) -> Result<(Rig, PosedRig)> {
+        let options = ReadOptions { mesh: self.params.mesh.clone() };
+        let rig = desal_rig::read_rig(self.file, &options)?;
+        let frames = desal_rig::sample_frames(&rig, &self.params.frame_config()?, self.file)?;
+        let posed = desal_rig::pose_rig(&rig, &frames).with_context(|| format!("{}", self.file.display()))?;
+        Ok((rig, posed))
+    }
+
+    /// Ingest: the posed, welded rig as a pose set.
+    pub fn compute_poses(&self) -> Result<StageOutput<PoseSetV1, IngestSummary>> {
+        let (rig, posed) = self.load()?;
+        let set = &posed.poses;
+        let tm = set.template_mesh();
+        let (lo, hi) = tm.bounding_box().expect("non-empty");
+        let summary = IngestSummary {
+            poses: set.pose_count(),
+            vertices: set.vertex_count(),
+            faces: set.face_count(),
+            template: set.names[0].clone(),
+            removed_degenerate_faces: Vec::new(),
+            removed_duplicate_faces: Vec::new(),
+            bbox_min: lo.into(),
+            bbox_max: hi.into(),
+            diagonal: (hi - lo).norm(),
+        };
+        let note = format!(
+            "rig '{}': {} split -> {} welded vertices, {} joints, {} poses (bind + {} frames)",
+            rig.mesh.name,
+            rig.mesh.vertex_count(),
+            set.vertex_count(),
+            rig.skin.joints.len(),
+            set.pose_count(),
+            set.pose_count() - 1
+        );
+        Ok(StageOutput { body: PoseSetV1::from_pose_set(set), summary, note })
+    }
+
+    /// Labels: each welded vertex's heaviest joint, small parts merged into the parent.
+    pub fn compute_labels(&self, set: &desal_mesh::PoseSet) -> Result<StageOutput<LabelsV1, LabelsSummary>> {
+        let (rig, posed) = self.load()?;
+        if posed.poses.vertex_count() != set.vertex_count() {
+            bail!("{}: the rig has changed since its pose set was made", self.file.display());
+        }
+        let labels = desal_rig::dominant_joint_parts(&rig, &posed.influences, &self.params.parts_config()?);
+        labels.check_parts_fittable(set.template_positions()).with_context(|| {
+            format!("{}: dominant-joint parts (raise rig.min_part_vertices)", self.file.display())
+        })?;
+        let sizes: Vec<usize> = labels.members().iter().map(Vec::len).collect();
+        let note = format!(
+            "{} dominant-joint parts of {} joints, smallest has {} vertices",
+            labels.part_count(),
+            rig.skin.joints.len(),
+            sizes.iter().min().unwrap_or(&0)
+        );
+        let summary = LabelsSummary { parts: labels.names.clone(), vertices_per_part: sizes };
+        Ok(StageOutput { body: LabelsV1::from_labels(&labels), summary, note })
+    }
+}
+
+/// `simplified.glb`'s JSON sidecar (`simplified-rig.json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct SimplifiedRigSummary {
+    pub placement: String,
+    pub weights: &'static str,
+    pub simplified_vertices: usize,
+    pub output_vertices: usize,
+    pub output_faces: usize,
+    pub seam_vertices: usize,
+    pub cross_chart_faces: usize,
+    pub refitted_vertices: usize,
+    pub max_influences: usize,
+}
+
+/// The simplified rig's bytes: the input's skeleton, inverse bind matrices and animations
+/// with the simplified mesh (subset placement: exact weights; optimal: refitted).
+pub fn simplified_glb(
+    source: &RigSource,
+    simplified: &SimplifiedV1,
+    map: &MapV1,
+) -> Result<(Vec<u8>, SimplifiedRigSummary)> {
+    let input = RigInput { file: &source.file, params: &source.params };
+    let (rig, posed) = input.load()?;
+    let (out, report) = simplified_rig(&rig, &posed, simplified, map)?;
+    let bytes = desal_rig::write_glb(&out)?;
+    let subset = simplified.simp_to_orig.iter().all(Option::is_some);
+    let summary = SimplifiedRigSummary {
+        placement: simplified.placement.clone(),
+        weights: if subset { "exact (subset placement)" } else { "least-squares refit over the pose set" },
+        simplified_vertices: report.simplified_vertices,
+        output_vertices: report.output_vertices,
+        output_faces: report.output_faces,
+        seam_vertices: report.seam_vertices,
+        cross_chart_faces: report.cross_chart_faces,
+        refitted_vertices: report.refitted_vertices,
+        max_influences: report.max_influences,
+    };
+    Ok((bytes, summary))
+}
+
+/// The simplified rig of a posed rig, stage 3's mesh and stage 4's map.
+pub fn simplified_rig(
+    rig: &Rig,
+    posed: &PosedRig,
+    simplified: &SimplifiedV1,
+    map: &MapV1,
+) -> Result<(Rig, desal_rig::SimplifiedReport)> {
+    let positions: Vec<desal_mesh::Vec3> = simplified.positions.iter().map(|&p| p.into()).collect();
+    let subset = simplified.simp_to_orig.iter().all(Option::is_some);
+    let input = desal_rig::SimplifiedInput {
+        positions: &positions,
+        faces: &map.faces,
+        simp_to_welded: &map.simp_to_orig,
+        subset,
+    };
+    let targets = desal_rig::PoseTargets { joints: &posed.joints, positions: &posed.poses.poses };
+    Ok(desal_rig::simplified_rig(rig, &posed.weld, &input, &targets)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params() -> RigParams {
+        toml::from_str("file = \"a.glb\"").unwrap()
+    }
+
+    /// Every setting and the file's bytes reach the keys; the path does not.
+    #[test]
+    fn each_key_input_changes_the_key() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.glb"), dir.path().join("b.glb"));
+        std::fs::write(&a, b"one").unwrap();
+        std::fs::write(&b, b"one").unwrap();
+        let base = params();
+        let key = |file: &Path, p: &RigParams| RigInput { file, params: p }.ingest_key().unwrap().hash();
+        let reference = key(&a, &base);
+        assert_eq!(key(&b, &base), reference, "the same bytes under another name");
+        let variants = [
+            RigParams { mesh: Some("Body".into()), ..base.clone() },
+            RigParams { poses: PosesFrom::Random, ..base.clone() },
+            RigParams { frames: 61, ..base.clone() },
+            RigParams { seed: 1, ..base.clone() },
+            RigParams { max_degrees: 31.0, ..base.clone() },
+        ];
+        for v in &variants {
+            assert_ne!(key(&a, v), reference, "{v:?}");
+        }
+        std::fs::write(&b, b"two").unwrap();
+        assert_ne!(key(&b, &base), reference, "other bytes");
+        let poses = ContentHash::of(b"poses");
+        let labels = |p: &RigParams| RigInput { file: &a, params: p }.labels_key(poses).unwrap().hash();
+        assert_ne!(labels(&RigParams { min_part_vertices: 51, ..base.clone() }), labels(&base));
+    }
+
+    #[test]
+    fn defaults_and_bad_settings() {
+        let p = params();
+        assert_eq!(
+            (p.poses, p.frames, p.seed, p.max_degrees, p.min_part_vertices),
+            (PosesFrom::Animations, 60, 0, 30.0, 50)
+        );
+        assert!(RigParams { frames: 0, ..p.clone() }.frame_config().is_err());
+        assert!(RigParams { max_degrees: 200.0, ..p.clone() }.frame_config().is_err());
+        assert!(RigParams { min_part_vertices: 2, ..p.clone() }.parts_config().is_err());
+        let both: RigParams = toml::from_str("file = \"a.glb\"\nposes = \"both\"").unwrap();
+        assert_eq!(both.poses, PosesFrom::Both);
+        assert!(toml::from_str::<RigParams>("file = \"a.glb\"\nposes = \"all\"").is_err());
+        assert!(toml::from_str::<RigParams>("file = \"a.glb\"\nparts = \"auto\"").is_err());
+    }
+}
