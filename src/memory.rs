@@ -125,34 +125,24 @@ pub fn saliency(
     crate::stages::saliency::compute(params, fit, set.template_mesh().diagonal())
 }
 
-/// Stages 1–4, in `desal run`'s order ([`crate::stages::run_stages`]).
+/// Stages 1–4, in `desal run`'s order ([`crate::stages::run_stages`]). With
+/// `multipose`, stage 3 is multi-pose QEM (`desal eval`'s `multipose`, subset
+/// placement) instead of the template's saliency-weighted quadrics.
 pub fn simplify_pose_set(
     params: &StageParams,
     set: &PoseSet,
     labels: &PartLabels,
+    multipose: bool,
     progress: &dyn Progress,
 ) -> Result<Simplification> {
     let config = params.simplify.config()?;
     let fit = fit(&params.fit, set, labels, progress)?;
     let saliency = saliency(&params.saliency, set, &fit.body)?;
-    let simplified =
-        simplify::compute(&config, &set.template_mesh(), &saliency.body.weights, labels, progress)?;
-    let map = map::compute(&simplified.body, set, labels)?;
-    Ok(Simplification { fit, saliency, simplified, map })
-}
-
-/// Stages 1–2 and multi-pose QEM (`desal eval`'s `multipose`, subset placement) with
-/// stage 4.
-pub fn simplify_pose_set_multipose(
-    params: &StageParams,
-    set: &PoseSet,
-    labels: &PartLabels,
-    progress: &dyn Progress,
-) -> Result<Simplification> {
-    let config = params.simplify.config()?;
-    let fit = fit(&params.fit, set, labels, progress)?;
-    let saliency = saliency(&params.saliency, set, &fit.body)?;
-    let simplified = simplify::compute_multipose(&config, set, labels)?;
+    let simplified = if multipose {
+        simplify::compute_multipose(&config, set, labels)?
+    } else {
+        simplify::compute(&config, &set.template_mesh(), &saliency.body.weights, labels, progress)?
+    };
     let map = map::compute(&simplified.body, set, labels)?;
     Ok(Simplification { fit, saliency, simplified, map })
 }

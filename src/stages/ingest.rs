@@ -138,6 +138,24 @@ pub struct IngestSummary {
     pub diagonal: f64,
 }
 
+impl IngestSummary {
+    /// The summary of an ingested pose set, with the faces ingest removed from it.
+    pub fn of(set: &PoseSet, cleanup: FaceCleanup) -> Self {
+        let (lo, hi) = set.template_mesh().bounding_box().expect("a pose set is never empty");
+        IngestSummary {
+            poses: set.pose_count(),
+            vertices: set.vertex_count(),
+            faces: set.face_count(),
+            template: set.names[set.template].clone(),
+            removed_degenerate_faces: cleanup.degenerate,
+            removed_duplicate_faces: cleanup.duplicate,
+            bbox_min: lo.into(),
+            bbox_max: hi.into(),
+            diagonal: (hi - lo).norm(),
+        }
+    }
+}
+
 /// BLAKE3 of each file's bytes, in parallel.
 pub fn hash_files(files: &[PathBuf]) -> Result<Vec<ContentHash>> {
     files
@@ -227,19 +245,7 @@ pub fn ingest_poses(
     }
     let poses = meshes.into_iter().map(|m| m.positions).collect();
     let set = PoseSet::try_new(names, poses, faces, template).context("invalid pose set")?;
-    let tm = set.template_mesh();
-    let (lo, hi) = tm.bounding_box().expect("non-empty");
-    let summary = IngestSummary {
-        poses: set.pose_count(),
-        vertices: set.vertex_count(),
-        faces: set.face_count(),
-        template: set.names[template].clone(),
-        removed_degenerate_faces: cleanup.degenerate,
-        removed_duplicate_faces: cleanup.duplicate,
-        bbox_min: lo.into(),
-        bbox_max: hi.into(),
-        diagonal: (hi - lo).norm(),
-    };
+    let summary = IngestSummary::of(&set, cleanup);
     Ok((set, summary))
 }
 

@@ -188,19 +188,7 @@ impl RigInput<'_> {
     pub fn compute_poses(&self) -> Result<StageOutput<PoseSetV1, IngestSummary>> {
         let (rig, posed) = self.load()?;
         let set = &posed.poses;
-        let tm = set.template_mesh();
-        let (lo, hi) = tm.bounding_box().expect("non-empty");
-        let summary = IngestSummary {
-            poses: set.pose_count(),
-            vertices: set.vertex_count(),
-            faces: set.face_count(),
-            template: set.names[0].clone(),
-            removed_degenerate_faces: Vec::new(),
-            removed_duplicate_faces: Vec::new(),
-            bbox_min: lo.into(),
-            bbox_max: hi.into(),
-            diagonal: (hi - lo).norm(),
-        };
+        let summary = IngestSummary::of(set, desal_mesh::FaceCleanup::default());
         let note = format!(
             "rig '{}': {} split -> {} welded vertices, {} joints, {} poses (bind + {} frames)",
             rig.mesh.name,

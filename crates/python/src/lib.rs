@@ -461,12 +461,8 @@ fn simplify_pose_set<'py>(
     let ps = ps.get();
     let (params, multipose) = stage_params(method, fit, saliency, simplify)?;
     let (s, poses, labels) = detached(py, progress, |p| {
-        let s = if multipose {
-            memory::simplify_pose_set_multipose(&params, &ps.set, &ps.labels, p)
-        } else {
-            memory::simplify_pose_set(&params, &ps.set, &ps.labels, p)
-        }
-        .map_err(errors::failed)?;
+        let s =
+            memory::simplify_pose_set(&params, &ps.set, &ps.labels, multipose, p).map_err(errors::failed)?;
         let (poses, labels) = memory::apply_map(&s.map.body, &ps.set, &ps.labels).map_err(errors::failed)?;
         Ok((s, poses, labels))
     })?;
