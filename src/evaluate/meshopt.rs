@@ -89,19 +89,8 @@ pub fn simplify(
 
 /// The kept vertices in original index order, and the faces renumbered onto them.
 fn subset_body(template: &TriMesh, result: &[u32]) -> SimplifiedV1 {
-    let mut new_index = vec![u32::MAX; template.vertex_count()];
-    result.iter().for_each(|&v| new_index[v as usize] = 0);
-    let mut kept = Vec::new();
-    for (v, slot) in new_index.iter_mut().enumerate() {
-        if *slot == 0 {
-            *slot = kept.len() as u32;
-            kept.push(v as u32);
-        }
-    }
-    let faces: Vec<[u32; 3]> = result
-        .chunks_exact(3)
-        .map(|f| [new_index[f[0] as usize], new_index[f[1] as usize], new_index[f[2] as usize]])
-        .collect();
+    let faces: Vec<[u32; 3]> = result.chunks_exact(3).map(|f| [f[0], f[1], f[2]]).collect();
+    let (kept, faces) = super::methods::used_vertices(template.vertex_count(), &faces);
     let mut body = crate::stages::simplify::external(&TriMesh {
         positions: kept.iter().map(|&v| template.positions[v as usize]).collect(),
         faces,

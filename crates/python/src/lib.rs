@@ -105,8 +105,7 @@ impl PyPoseSet {
     /// Positions, (poses, vertices, 3) float64 (stored at float32, as `desal run` stores them).
     #[getter]
     fn poses<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        let flat: Vec<f64> = self.set.poses.iter().flatten().flat_map(|p| [p.x, p.y, p.z]).collect();
-        convert::array(py, flat, [self.set.pose_count(), self.set.vertex_count(), 3]).into_any()
+        pose_array(py, &self.set)
     }
 
     /// The triangle list, (faces, 3) int64, after removing degenerate and duplicate faces.
