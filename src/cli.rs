@@ -350,9 +350,7 @@ pub struct HierarchyArgs {
 }
 
 pub fn hierarchy(args: &HierarchyArgs) -> Result<()> {
-    use stages::hierarchy::{
-        HELDOUT_FOLDS, HierarchyParams, HierarchyReport, LevelSettings, compute_level, npz_arrays,
-    };
+    use stages::hierarchy::{HierarchyParams, HierarchyReport, LevelSettings, compute_level, npz_arrays};
     let (poses, _) = read::<PoseSetV1>(&args.poses)?;
     let (labels, _) = read::<LabelsV1>(&args.labels)?;
     let set = poses.to_pose_set().with_context(|| format!("{}", args.poses.display()))?;
@@ -379,12 +377,8 @@ pub fn hierarchy(args: &HierarchyArgs) -> Result<()> {
     }
     let bodies: Vec<_> = levels.iter().map(|l| &l.body).collect();
     let arrays = npz_arrays(set.vertex_count(), &set.faces, &bodies)?;
-    let report = HierarchyReport {
-        levels: arrays.levels.clone(),
-        upsampler: args.upsampler_name(),
-        heldout_folds: HELDOUT_FOLDS,
-        steps: levels.iter().map(|l| &l.summary).collect(),
-    };
+    let report =
+        HierarchyReport::new(arrays.levels.clone(), args.upsampler_name(), levels.iter().map(|l| &l.summary));
     let report = serde_json::to_value(&report)?;
     let mut files: Vec<(PathBuf, FileWriter)> =
         vec![(args.output.clone(), Box::new(move |p| Ok(desal_io::npz::write_hierarchy_npz(p, &arrays)?)))];

@@ -11,6 +11,7 @@
 //! | `simplified-template-raw.ply` | stage 3's template before mapping |
 //! | `simplified/<pose>.ply`, `simplified/parts.txt`, `vertex_map.txt` | the registered simplified pose set |
 //! | `hierarchy-<k>.dsa`, `hierarchy.npz`, `hierarchy.json` | with `[dataset.hierarchy]`: each level's cache entry, the npz of every level (`stages::hierarchy::npz_arrays`), the levels' summaries |
+//! | `hierarchy.png`, `upsampling-error.png`, `upsampling-error-<k>.ply` | with `[dataset.hierarchy]`: the levels side by side; the held-out per-vertex upsampling error of each level, fitted against barycentric (RMS, drawn and as PLY properties) |
 //! | `simplified.glb`, `simplified-rig.json` | with `[dataset.rig]`: the simplified rig (`stages::rig::simplified_glb`) and its figures |
 //! | `report.json` | the run's report, with `outputs_key` |
 //! | `eval/` | `desal eval`'s, kept across runs |
@@ -106,7 +107,7 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
     add_artifact(&mut outputs, "simplified", &stages.simplified.artifact_path, &stages.simplified.summary);
     add_artifact(&mut outputs, "map", &stages.map.artifact_path, &stages.map.summary);
     if !stages.hierarchy.is_empty() {
-        add_hierarchy(&mut outputs, stages, set)?;
+        add_hierarchy(&mut outputs, stages, set, part_labels, up_axis)?;
     }
     if let Some(rig) = &stages.rig {
         // Built before anything is written: a rig that cannot be written fails the run
@@ -122,26 +123,48 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
     Ok(outputs)
 }
 
-/// `hierarchy-<k>.dsa` per level, `hierarchy.npz` and `hierarchy.json`.
-fn add_hierarchy(outputs: &mut DatasetOutputs, stages: &DatasetStages, set: &PoseSet) -> Result<()> {
-    use crate::stages::hierarchy::{HELDOUT_FOLDS, HierarchyReport, npz_arrays};
+/// `hierarchy-<k>.dsa` per level, `hierarchy.npz`, `hierarchy.json`, and the figures:
+/// `hierarchy.png` (the levels side by side) and `upsampling-error.png` and `upsampling-error-<k>.ply` (the
+/// held-out per-vertex upsampling error, fitted against barycentric).
+fn add_hierarchy(
+    outputs: &mut DatasetOutputs,
+    stages: &DatasetStages,
+    set: &PoseSet,
+    labels: &PartLabels,
+    up_axis: Option<&str>,
+) -> Result<()> {
+    use crate::stages::hierarchy::{HierarchyReport, npz_arrays};
     let bodies = stages.hierarchy.iter().map(|l| l.body()).collect::<Result<Vec<_>>>()?;
     let arrays = npz_arrays(set.vertex_count(), &set.faces, &bodies)?;
-    let report = HierarchyReport {
-        levels: arrays.levels.clone(),
-        upsampler: &bodies[0].upsampler,
-        heldout_folds: HELDOUT_FOLDS,
-        steps: stages.hierarchy.iter().map(|l| &l.summary).collect(),
-    };
+    let summaries: Vec<_> = stages.hierarchy.iter().map(|l| &l.summary).collect();
+    let report = HierarchyReport::new(arrays.levels.clone(), &bodies[0].upsampler, summaries.iter().copied());
     let report = serde_json::to_value(&report)?;
     for (k, level) in stages.hierarchy.iter().enumerate() {
         outputs.artifacts.push((format!("hierarchy-{}.dsa", k + 1), level.artifact_path.clone()));
     }
+    let up = crate::pictures::parse_up_axis(up_axis)?;
+    let template = set.template_mesh();
+    let levels_png = crate::pictures::hierarchy_levels_png(&template, labels, &bodies, up)?;
+    let maps = crate::pictures::UpsamplingMaps::new(&summaries);
+    let error_png = crate::pictures::upsampling_error_png(&template, &maps, up)?;
     outputs.files.push((
         "hierarchy.npz".into(),
         Box::new(move |p| Ok(desal_io::npz::write_hierarchy_npz(p, &arrays)?)),
     ));
     outputs.files.push(("hierarchy.json".into(), Box::new(move |p| Ok(desal_io::write_json(p, &report)?))));
+    outputs
+        .files
+        .push(("hierarchy.png".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, &levels_png)?))));
+    outputs
+        .files
+        .push(("upsampling-error.png".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, &error_png)?))));
+    for k in 0..maps.levels.len() {
+        let (template, columns) = (template.clone(), maps.columns(k));
+        outputs.files.push((
+            format!("upsampling-error-{}.ply", k + 1),
+            Box::new(move |p| crate::pictures::write_scalars_ply(p, &template, columns)),
+        ));
+    }
     Ok(())
 }
 

@@ -231,6 +231,11 @@ pub struct HeldOutError {
     pub mse: f64,
     pub v2f: Option<f64>,
     pub folds: Vec<FoldError>,
+    /// Per full-resolution vertex, the squared distance averaged over every measured
+    /// pose (each in its own fold), m²: the map of `upsampling-error.png`. Kept in the
+    /// cached summary, left out of `hierarchy.json` (see [`HierarchyReport`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub vertex_mse: Vec<f32>,
 }
 
 /// One fold of [`HeldOutError`].
@@ -427,6 +432,7 @@ fn heldout<const N: usize>(
         }
     }
     let mut folds: [Vec<FoldError>; N] = std::array::from_fn(|_| Vec::new());
+    let mut vertex_sums: [Vec<f64>; N] = std::array::from_fn(|_| vec![0.0; full.vertex_count()]);
     for fold in 0..HELDOUT_FOLDS {
         let mask: Vec<bool> = (0..full.pose_count()).map(|p| all[p] && p % HELDOUT_FOLDS != fold).collect();
         let measured: Vec<usize> = (0..full.pose_count()).filter(|p| p % HELDOUT_FOLDS == fold).collect();
@@ -448,6 +454,9 @@ fn heldout<const N: usize>(
             .collect();
         let errors = upsampling_errors(full, &measured, &candidates, v2f)?;
         for (k, e) in errors.iter().enumerate() {
+            for (sum, v) in vertex_sums[k].iter_mut().zip(&e.vertex_mse) {
+                *sum += v * measured.len() as f64;
+            }
             folds[k].push(FoldError {
                 fold,
                 training_poses: mask.iter().filter(|&&m| m).count(),
@@ -457,25 +466,48 @@ fn heldout<const N: usize>(
             });
         }
     }
+    let mut vertex_sums = vertex_sums.into_iter();
     Ok(folds.map(|folds| {
         let n = folds.iter().map(|f| f.measured_poses).sum::<usize>().max(1) as f64;
         let weighted = |x: f64, f: &FoldError| x * f.measured_poses as f64;
+        let sums = vertex_sums.next().expect("one per upsampler");
         HeldOutError {
             mse: folds.iter().map(|f| weighted(f.mse, f)).sum::<f64>() / n,
             v2f: folds.iter().map(|f| f.v2f.map(|v| weighted(v, f))).sum::<Option<f64>>().map(|v| v / n),
             folds,
+            vertex_mse: sums.iter().map(|s| (s / n) as f32).collect(),
         }
     }))
 }
 
-/// `hierarchy.json`: the level counts and every level step's summary.
+/// `hierarchy.json`: the level counts and every level step's summary, without the
+/// per-vertex error maps (those are `upsampling-error.png`/`.ply`).
 #[derive(Debug, Clone, Serialize)]
 pub struct HierarchyReport<'a> {
     /// Vertex count of each level, level 0 first.
     pub levels: Vec<usize>,
     pub upsampler: &'a str,
     pub heldout_folds: usize,
-    pub steps: Vec<&'a LevelSummary>,
+    pub steps: Vec<LevelSummary>,
+}
+
+impl<'a> HierarchyReport<'a> {
+    pub fn new<'s>(
+        levels: Vec<usize>,
+        upsampler: &'a str,
+        steps: impl IntoIterator<Item = &'s LevelSummary>,
+    ) -> Self {
+        let steps = steps
+            .into_iter()
+            .map(|s| {
+                let mut s = s.clone();
+                s.heldout_fitted.vertex_mse.clear();
+                s.heldout_barycentric.vertex_mse.clear();
+                s
+            })
+            .collect();
+        Self { levels, upsampler, heldout_folds: HELDOUT_FOLDS, steps }
+    }
 }
 
 /// The npz arrays of a hierarchy: level 0 (`full`'s vertex count and faces) and the level

@@ -75,6 +75,33 @@ fn sample_hierarchy_reads_back_reruns_one_level_and_matches_the_single_stage_com
         serde_json::from_slice(&std::fs::read(out.join("hierarchy.json")).unwrap()).unwrap();
     assert_eq!(json["levels"], serde_json::json!([13380, 2500, 625]));
     assert_eq!(json["steps"][1]["heldout_fitted"]["folds"].as_array().unwrap().len(), 2);
+    assert!(
+        json["steps"][0]["heldout_fitted"].get("vertex_mse").is_none(),
+        "per-vertex maps stay out of the json"
+    );
+
+    // The figures: the levels side by side, and per level the held-out per-vertex error
+    // map, whose mean over the vertices is the level's held-out MSE (each pose is
+    // measured once, in the fold that holds it out).
+    for png in ["hierarchy.png", "upsampling-error.png"] {
+        assert!(std::fs::read(out.join(png)).unwrap().starts_with(b"\x89PNG"), "{png}");
+    }
+    for k in 0..2 {
+        let ply = desal_io::ply::read_ply_full(&out.join(format!("upsampling-error-{}.ply", k + 1))).unwrap();
+        assert_eq!(ply.mesh.vertex_count(), 13380);
+        for (name, upsampler) in
+            [("fitted_rms_mm", "heldout_fitted"), ("barycentric_rms_mm", "heldout_barycentric")]
+        {
+            let (_, rms) = ply.scalars.iter().find(|(n, _)| n == name).expect(name);
+            let mean_mse = rms.iter().map(|&r| (f64::from(r) * 1e-3).powi(2)).sum::<f64>() / rms.len() as f64;
+            let mse = json["steps"][k][upsampler]["mse"].as_f64().unwrap();
+            assert!(
+                (mean_mse / mse - 1.0).abs() < 1e-4,
+                "level {}: {name} mean {mean_mse} vs mse {mse}",
+                k + 1
+            );
+        }
+    }
 
     // The single-stage command on the run's artifacts writes the same bytes.
     let single = dir.path().join("single.npz");
