@@ -1,10 +1,10 @@
 //! The experiment proper (paper §4), for the simplified pose sets of several methods:
 //!
 //! 1. [`deform`]: stage 1's rigid fit on the *simplified* set gives every pose's part
-//!    rotations; the SCAPE model is fitted on all poses (in-sample) and once per fold
-//!    without the fold's poses (held-out; the template always trains); each model
-//!    synthesises its poses from their part rotations, placed at the ground truth's
-//!    centroid.
+//!    motions; the deformation model ([`pose_model`]: SCAPE part-anchored by default,
+//!    SCAPE placed at the ground truth's centroid as in the paper, or LBS) is fitted on
+//!    all poses (in-sample) and once per fold without the fold's poses (held-out; the
+//!    template always trains); each model synthesises its poses from their part motions.
 //! 2. [`measure`]: every deformed pose against two ground truths — the simplified pose
 //!    (the paper's measure) and the full-resolution pose (what a user cares about) — by
 //!    v2f (Eq. 6) and v2v (Eq. 7). Poses are measured in parallel; each target's search
@@ -21,8 +21,10 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use desal_eval::metrics::mean;
-use desal_eval::{ModelConfig, ModelReport, SurfaceIndex, V2fHalves, VertexIndex};
-use desal_mesh::{Face, Mat3, PartLabels, PoseSet, TriMesh, Vec3};
+use desal_eval::{
+    FittedModel, ModelConfig, ModelReport, PartTransform, PoseModel, SurfaceIndex, V2fHalves, VertexIndex,
+};
+use desal_mesh::{Face, PartLabels, PoseSet, TriMesh, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -35,11 +37,15 @@ pub struct ModelRun {
     pub training_poses: Vec<usize>,
     /// Pose indices it synthesised for measurement.
     pub test_poses: Vec<usize>,
+    /// SCAPE: joints of the part tree; LBS: bones (the parts).
     pub joint_count: usize,
-    /// Mean squared Frobenius residual of the per-triangle regression (dimensionless).
+    /// SCAPE: mean squared Frobenius residual of the per-triangle regression
+    /// (dimensionless); LBS: mean squared skinning residual over the training poses
+    /// (squared input units).
     pub mean_q_residual: f64,
+    /// SCAPE: nonzeros of the Poisson factor; LBS: 0.
     pub factor_nonzeros: usize,
-    /// Wall time of `fit_model` (regressions + factorisation), seconds.
+    /// Wall time of the model fit, seconds.
     pub fit_seconds: f64,
     /// Wall time of synthesising all `test_poses`, seconds.
     pub synthesis_seconds: f64,
@@ -61,26 +67,58 @@ pub struct Deformed {
     pub rotation_seconds: f64,
 }
 
-/// Fits the model on `set` (in-sample and per fold of `folds`, each a list of test
-/// poses that excludes the template) and deforms the template to every pose.
-pub fn deform(set: &PoseSet, labels: &PartLabels, folds: &[Vec<usize>]) -> Result<Deformed> {
+/// The deformation models `desal eval --model` offers, by name.
+pub const MODELS: &[&str] = &["scape", "scape-centroid", "lbs"];
+
+/// The model `desal eval` uses when none is named: the part-anchored SCAPE model, the
+/// lowest held-out error at full resolution on SCAPE (6.77e-5 m² v2v, against 1.79e-4
+/// placed by the centroid and 9.24e-5 for LBS; `crates/eval/tests/floor.rs`).
+pub const DEFAULT_MODEL: &str = "scape";
+
+/// The deformation model named `name` (one of [`MODELS`]).
+pub fn pose_model(name: &str) -> Result<PoseModel> {
+    Ok(match name {
+        "scape" => PoseModel::Scape(ModelConfig::default()),
+        "scape-centroid" => PoseModel::Scape(ModelConfig {
+            anchoring: desal_eval::Anchoring::Centroid,
+            ..ModelConfig::default()
+        }),
+        "lbs" => PoseModel::Lbs(desal_eval::LbsConfig::default()),
+        other => anyhow::bail!("unknown deformation model '{other}': use {}", MODELS.join(", ")),
+    })
+}
+
+/// Fits `model` on `set` (in-sample and per fold of `folds`, each a list of test poses
+/// that excludes the template) and deforms the template to every pose. Every model is
+/// driven by stage 1's rigid motion of each part, fitted on this set.
+pub fn deform(
+    set: &PoseSet,
+    labels: &PartLabels,
+    folds: &[Vec<usize>],
+    model: &PoseModel,
+) -> Result<Deformed> {
     let started = Instant::now();
     let fit = desal_fit::fit_pose_set(set, labels, &desal_fit::FitConfig::default(), &desal_mesh::NoProgress)
         .context("stage 1 on the simplified pose set")?;
-    let rotations: Vec<Vec<Mat3>> =
-        fit.part_fits.iter().map(|parts| parts.iter().map(|f| f.linear).collect()).collect();
+    let transforms: Vec<Vec<PartTransform>> = fit
+        .part_fits
+        .iter()
+        .map(|parts| {
+            parts.iter().map(|f| PartTransform { rotation: f.linear, translation: f.translation }).collect()
+        })
+        .collect();
     let rotation_seconds = started.elapsed().as_secs_f64();
     let centroids: Vec<Vec3> = set.poses.iter().map(|p| centroid(p)).collect();
+    let inputs = ModelInputs { set, labels, transforms: &transforms, centroids: &centroids, model };
 
     let all_poses: Vec<usize> = (0..set.pose_count()).collect();
-    let (in_sample_run, in_sample) =
-        fit_and_synthesise(set, labels, &rotations, &centroids, None, &all_poses)?;
+    let (in_sample_run, in_sample) = inputs.fit_and_synthesise(None, &all_poses)?;
     let mut models = vec![in_sample_run];
     let mut held_out = vec![None; set.pose_count()];
     let mut fold_of_pose = vec![None; set.pose_count()];
     for (k, test) in folds.iter().enumerate() {
         debug_assert!(!test.contains(&set.template), "the template always trains");
-        let (run, synthesised) = fit_and_synthesise(set, labels, &rotations, &centroids, Some(k), test)?;
+        let (run, synthesised) = inputs.fit_and_synthesise(Some(k), test)?;
         for (&pose, positions) in test.iter().zip(synthesised) {
             held_out[pose] = Some(positions);
             fold_of_pose[pose] = Some(k);
@@ -90,47 +128,58 @@ pub fn deform(set: &PoseSet, labels: &PartLabels, folds: &[Vec<usize>]) -> Resul
     Ok(Deformed { in_sample, held_out, fold_of_pose, models, rotation_seconds })
 }
 
-/// Fits one model on every pose but `test` (on every pose when `fold` is `None`) and
-/// synthesises the poses `test`, in that order.
-fn fit_and_synthesise(
-    set: &PoseSet,
-    labels: &PartLabels,
-    rotations: &[Vec<Mat3>],
-    centroids: &[Vec3],
-    fold: Option<usize>,
-    test: &[usize],
-) -> Result<(ModelRun, Vec<Vec<Vec3>>)> {
-    let training = match fold {
-        None => (0..set.pose_count()).collect(),
-        Some(_) => desal_eval::training_poses(set.pose_count(), test),
-    };
-    let what = fold.map_or_else(|| "in-sample model".to_owned(), |k| format!("model of fold {k}"));
-    let started = Instant::now();
-    // The paper's placement (centroid), as EVAL.md measures it; part-anchored synthesis
-    // (the crate's default) is not wired into `desal eval` yet (issue 17).
-    let config = ModelConfig { anchoring: desal_eval::Anchoring::Centroid, ..ModelConfig::default() };
-    let model = desal_eval::fit_model(set, labels, rotations, &training, &config)
-        .with_context(|| format!("fitting the {what}"))?;
-    let fit_seconds = started.elapsed().as_secs_f64();
-    let started = Instant::now();
-    let test_rotations: Vec<Vec<Mat3>> = test.iter().map(|&p| rotations[p].clone()).collect();
-    let test_centroids: Vec<Vec3> = test.iter().map(|&p| centroids[p]).collect();
-    let synthesised = model
-        .synthesize_many(&test_rotations, &test_centroids)
-        .with_context(|| format!("synthesising with the {what}"))?;
-    let synthesis_seconds = started.elapsed().as_secs_f64();
-    let ModelReport { joint_count, mean_q_residual, factor_nonzeros, .. } = *model.report();
-    let run = ModelRun {
-        fold,
-        training_poses: training,
-        test_poses: test.to_vec(),
-        joint_count,
-        mean_q_residual,
-        factor_nonzeros,
-        fit_seconds,
-        synthesis_seconds,
-    };
-    Ok((run, synthesised))
+/// What every fit of one set's model reads.
+struct ModelInputs<'a> {
+    set: &'a PoseSet,
+    labels: &'a PartLabels,
+    transforms: &'a [Vec<PartTransform>],
+    centroids: &'a [Vec3],
+    model: &'a PoseModel,
+}
+
+impl ModelInputs<'_> {
+    /// Fits one model on every pose but `test` (on every pose when `fold` is `None`) and
+    /// synthesises the poses `test`, in that order.
+    fn fit_and_synthesise(&self, fold: Option<usize>, test: &[usize]) -> Result<(ModelRun, Vec<Vec<Vec3>>)> {
+        let set = self.set;
+        let training = match fold {
+            None => (0..set.pose_count()).collect(),
+            Some(_) => desal_eval::training_poses(set.pose_count(), test),
+        };
+        let what = fold.map_or_else(|| "in-sample model".to_owned(), |k| format!("model of fold {k}"));
+        let started = Instant::now();
+        let model = self
+            .model
+            .fit(set, self.labels, self.transforms, &training)
+            .with_context(|| format!("fitting the {what}"))?;
+        let fit_seconds = started.elapsed().as_secs_f64();
+        let started = Instant::now();
+        let test_transforms: Vec<Vec<PartTransform>> =
+            test.iter().map(|&p| self.transforms[p].clone()).collect();
+        let test_centroids: Vec<Vec3> = test.iter().map(|&p| self.centroids[p]).collect();
+        let synthesised = model
+            .synthesize_many(&test_transforms, &test_centroids)
+            .with_context(|| format!("synthesising with the {what}"))?;
+        let synthesis_seconds = started.elapsed().as_secs_f64();
+        let (joint_count, mean_q_residual, factor_nonzeros) = match &model {
+            FittedModel::Scape(m) => {
+                let ModelReport { joint_count, mean_q_residual, factor_nonzeros, .. } = *m.report();
+                (joint_count, mean_q_residual, factor_nonzeros)
+            }
+            FittedModel::Lbs(m) => (self.labels.part_count(), m.report().mean_fit_residual, 0),
+        };
+        let run = ModelRun {
+            fold,
+            training_poses: training,
+            test_poses: test.to_vec(),
+            joint_count,
+            mean_q_residual,
+            factor_nonzeros,
+            fit_seconds,
+            synthesis_seconds,
+        };
+        Ok((run, synthesised))
+    }
 }
 
 fn centroid(points: &[Vec3]) -> Vec3 {

@@ -8,6 +8,7 @@
 //! | `paper-optimal`, `paper-subset` | cost × saliency × edge length (the paper, Eq. 5) | greedy / subset |
 //! | `multipose` | Mohr & Gleicher 2003: quadrics summed over all poses, no saliency | subset |
 //! | `meshopt`, `meshopt-regularize`, `meshopt-priority` | meshoptimizer in-process (feature `meshopt`, on by default): plain, `Regularize`, the most salient vertices flagged `Priority` (`meshopt.rs`) | subset |
+//! | `meshlab`, `meshlab-saliency` | MeshLab's quadric edge collapse through pymeshlab (`$DESAL_PYTHON` or `python3`): plain, and stage 2's weights as vertex quality (`qualityweight`; `meshlab.rs`); named explicitly, not in `all` | greedy |
 //! | `external:NAME=PATH` | a simplified template made by another tool | greedy |
 //!
 //! `optimal` placement moves vertices, so they are mapped back by the paper's greedy
@@ -35,9 +36,15 @@ pub enum Method {
     /// meshoptimizer, in-process.
     #[cfg(feature = "meshopt")]
     Meshopt(super::meshopt::Variant),
+    /// MeshLab through pymeshlab, in a Python subprocess.
+    Meshlab(super::meshlab::Variant),
     /// Another tool's simplified template, read from `path`.
     External { name: String, path: PathBuf },
 }
+
+/// Built-in methods that `all` leaves out, because they need more than this binary
+/// (MeshLab needs Python with pymeshlab).
+pub const OPTIONAL: &[&str] = &["meshlab", "meshlab-saliency"];
 
 /// The methods run when none are named, in table order.
 pub const ALL: &[&str] = &[
@@ -67,6 +74,7 @@ impl Method {
             Method::Multipose => "multipose".into(),
             #[cfg(feature = "meshopt")]
             Method::Meshopt(variant) => variant.name().into(),
+            Method::Meshlab(variant) => variant.name().into(),
             Method::External { name, .. } => name.clone(),
         }
     }
@@ -79,7 +87,8 @@ impl Method {
                 .with_context(|| format!("'{text}': an external method is written external:NAME=PATH"))?;
             let valid = !name.is_empty()
                 && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
-                && !ALL.contains(&name);
+                && !ALL.contains(&name)
+                && !OPTIONAL.contains(&name);
             if !valid {
                 bail!("'{text}': NAME must be letters, digits, '-' or '_', and not a built-in method name");
             }
@@ -87,6 +96,9 @@ impl Method {
         }
         if text == "multipose" {
             return Ok(Method::Multipose);
+        }
+        if let Some(variant) = super::meshlab::Variant::ALL.into_iter().find(|v| v.name() == text) {
+            return Ok(Method::Meshlab(variant));
         }
         #[cfg(feature = "meshopt")]
         if let Some(variant) = super::meshopt::Variant::ALL.into_iter().find(|v| v.name() == text) {
@@ -130,6 +142,7 @@ impl Method {
             Method::Multipose => "subset",
             #[cfg(feature = "meshopt")]
             Method::Meshopt(_) => "subset",
+            Method::Meshlab(_) => "optimal",
             Method::External { .. } => "external",
         }
     }
@@ -137,8 +150,9 @@ impl Method {
 
 fn unknown(text: &str) -> String {
     format!(
-        "unknown method '{text}': use {}, a bare qslim/saliency/paper (both placements), all, or external:NAME=PATH",
-        ALL.join(", ")
+        "unknown method '{text}': use {}, {}, a bare qslim/saliency/paper (both placements), all, or external:NAME=PATH",
+        ALL.join(", "),
+        OPTIONAL.join(", ")
     )
 }
 
@@ -241,6 +255,30 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 StopReason::NoValidCollapse
             };
             (body, Some(stop), note)
+        }
+        Method::Meshlab(variant) => {
+            let Target::Vertices(n) = target else {
+                bail!("{name}: MeshLab is compared at a vertex count; give --target-vertices");
+            };
+            let (mesh, seconds) = super::meshlab::simplify(&template, &inputs.weights, *variant, n)?;
+            let mesh = compact(&mesh);
+            let note = format!(
+                "MeshLab quadric edge collapse ({}): {} vertices, {} faces (target {n} vertices = {} faces), {seconds:.3} s in MeshLab",
+                if *variant == super::meshlab::Variant::Saliency {
+                    "saliency as vertex quality"
+                } else {
+                    "plain"
+                },
+                mesh.vertex_count(),
+                mesh.face_count(),
+                super::meshlab::face_target(&template, n),
+            );
+            let stop = if mesh.vertex_count() <= n {
+                StopReason::TargetReached
+            } else {
+                StopReason::NoValidCollapse
+            };
+            (simplify::external(&mesh), Some(stop), note)
         }
         Method::External { path, .. } => {
             let mesh =

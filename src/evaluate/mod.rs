@@ -20,6 +20,7 @@
 
 pub mod figures;
 pub mod measure;
+pub mod meshlab;
 #[cfg(feature = "meshopt")]
 pub mod meshopt;
 pub mod methods;
@@ -52,11 +53,18 @@ pub struct EvalArgs {
     /// The pipeline file (TOML; see pipelines/README.md). Every dataset is evaluated.
     pub pipeline: PathBuf,
     /// Methods, comma-separated: qslim-optimal, saliency-optimal, paper-optimal,
-    /// qslim-subset, saliency-subset, paper-subset, multipose; a bare qslim, saliency or
-    /// paper means both placements; external:NAME=PATH is another tool's simplified
-    /// template; all = every built-in method.
+    /// qslim-subset, saliency-subset, paper-subset, multipose, meshopt,
+    /// meshopt-regularize, meshopt-priority; meshlab and meshlab-saliency (Python with
+    /// pymeshlab: $DESAL_PYTHON or python3); a bare qslim, saliency or paper means both
+    /// placements; external:NAME=PATH is another tool's simplified template; all = every
+    /// built-in method but MeshLab's.
     #[arg(long, value_delimiter = ',', default_value = "all")]
     pub methods: Vec<String>,
+    /// The deformation model: scape (part-anchored, the default: the lowest held-out
+    /// error at full resolution), scape-centroid (the paper's placement), lbs (linear
+    /// blend skinning with the parts as bones).
+    #[arg(long, default_value = measure::DEFAULT_MODEL)]
+    pub model: String,
     /// Number of held-out folds over the non-template poses (at least 2).
     #[arg(long, default_value_t = 5)]
     pub folds: usize,
@@ -93,6 +101,7 @@ pub struct EvalArgs {
 /// dataset's results went.
 pub fn eval(args: &EvalArgs) -> Result<()> {
     let methods = Method::parse_list(&args.methods)?;
+    let model = measure::pose_model(&args.model)?;
     if args.folds < 2 {
         bail!("--folds {} is too few: held-out evaluation needs at least 2 folds", args.folds);
     }
@@ -115,7 +124,7 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
     let runs = crate::run::run_with_stages(&pipeline, &options).context("running the pipeline's stages")?;
     for DatasetRun { dataset, stages, .. } in &runs {
         let dataset = &pipeline.datasets[*dataset];
-        let dir = evaluate_dataset(&pipeline, dataset, stages, &methods, args)
+        let dir = evaluate_dataset(&pipeline, dataset, stages, &methods, &model, args)
             .with_context(|| format!("evaluating dataset '{}'", dataset.spec.name))?;
         println!("{}: {}", dataset.spec.name, dir.join("eval.md").display());
     }
@@ -137,6 +146,7 @@ fn evaluate_dataset(
     dataset: &Dataset,
     stages: &DatasetStages,
     methods: &[Method],
+    model: &desal_eval::PoseModel,
     args: &EvalArgs,
 ) -> Result<PathBuf> {
     let started = Instant::now();
@@ -167,7 +177,7 @@ fn evaluate_dataset(
     for method in methods {
         let set = methods::simplify_and_map(method, &inputs, target)?;
         log(&format!("{}: {}", method.name(), set.note));
-        let deformed = measure::deform(&set.mapped.poses, &set.mapped.labels, &folds)
+        let deformed = measure::deform(&set.mapped.poses, &set.mapped.labels, &folds, model)
             .with_context(|| format!("{}: deformation model", method.name()))?;
         let fit: f64 = deformed.models.iter().map(|m| m.fit_seconds + m.synthesis_seconds).sum();
         log(&format!(
@@ -211,6 +221,7 @@ fn evaluate_dataset(
     let regions = regions::Regions::new(&poses.template_mesh(), &inputs.labels);
     let mut report =
         build_report(pipeline, dataset, &inputs, target, &folds, &evaluated, &runs, &regions, &fitted);
+    report.model = args.model.clone();
     report.measure_seconds = measure_seconds;
     let eval_dir = dataset.out_dir.join("eval");
     desal_io::replace_dir(&eval_dir, &[], |dir| -> Result<()> {
@@ -220,7 +231,7 @@ fn evaluate_dataset(
             files.push("deformed/<method>/{in-sample,held-out,ground-truth}/<pose>.ply".into());
         }
         if args.sweep {
-            let points = sweep::run_sweep(&inputs, &args.sweep_vertices, &folds, &evaluated, &log);
+            let points = sweep::run_sweep(&inputs, &args.sweep_vertices, &folds, &evaluated, model, &log);
             desal_io::write_json(&dir.join("sweep.json"), &points)?;
             desal_io::write_atomic(&dir.join("sweep.png"), &figures::sweep_png(&sweep::panels(&points))?)?;
             files.extend(["sweep.json".into(), "sweep.png".into()]);
@@ -297,6 +308,7 @@ fn build_report(
         baseline: baseline.map(|_| BASELINE.to_owned()),
         methods,
         joint_band_radius: regions.radius,
+        model: String::new(),
         measure_seconds: 0.0,
         total_seconds: 0.0,
     }

@@ -37,6 +37,8 @@ pub struct EvalReport {
     pub methods: Vec<MethodReport>,
     /// Half-width of the joint bands of the region table, input units.
     pub joint_band_radius: f64,
+    /// The deformation model (`desal eval --model`): `scape`, `scape-centroid` or `lbs`.
+    pub model: String,
     /// Wall time of measuring every method's poses, seconds.
     pub measure_seconds: f64,
     pub total_seconds: f64,
@@ -211,6 +213,20 @@ pub fn versus(method: &[PoseRecord], baseline: &[PoseRecord]) -> Versus {
     Versus { in_sample: split(|p| p.in_sample), held_out: split(|p| p.held_out) }
 }
 
+/// One line on a `desal eval --model` name, for `eval.md`.
+fn model_description(model: &str) -> &'static str {
+    match model {
+        "scape" => {
+            "`scape`: the SCAPE pose-deformation model, each part's rigid-fit translation a soft anchor of the Poisson solve"
+        }
+        "scape-centroid" => {
+            "`scape-centroid`: the SCAPE pose-deformation model placed at the ground truth's centroid, as in the paper"
+        }
+        "lbs" => "`lbs`: linear blend skinning with the parts as bones, weights fitted on the training poses",
+        _ => "unknown",
+    }
+}
+
 /// `eval.md`.
 pub fn markdown(report: &EvalReport, figures: &[String]) -> String {
     let mut md = String::new();
@@ -220,13 +236,14 @@ pub fn markdown(report: &EvalReport, figures: &[String]) -> String {
     let _ = writeln!(
         md,
         "{} poses of {} vertices and {} faces (template `{}`), simplified to {} by each method, carried to every \
-         pose (stage 4), then the SCAPE pose-deformation model is fitted on the simplified set and deforms its \
+         pose (stage 4), then the deformation model ({}) is fitted on the simplified set and deforms its \
          template to every pose. Produced by desal {} from `{}`.\n",
         report.pose_names.len(),
         report.original_vertices,
         report.original_faces,
         template_name,
         report.target,
+        model_description(&report.model),
         report.desal_version,
         report.pipeline,
     );

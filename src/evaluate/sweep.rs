@@ -39,6 +39,7 @@ pub fn run_sweep(
     counts: &[usize],
     folds: &[Vec<usize>],
     evaluated: &[usize],
+    model: &desal_eval::PoseModel,
     log: &dyn Fn(&str),
 ) -> Vec<SweepPoint> {
     let methods: Vec<Method> =
@@ -49,7 +50,7 @@ pub fn run_sweep(
         for method in &methods {
             let started = Instant::now();
             let result = simplify_and_map(method, inputs, Target::Vertices(count)).and_then(|set| {
-                let deformed = deform(&set.mapped.poses, &set.mapped.labels, folds)?;
+                let deformed = deform(&set.mapped.poses, &set.mapped.labels, folds, model)?;
                 Ok((set, deformed))
             });
             let seconds = started.elapsed().as_secs_f64();
