@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Reproduces EVAL.md's SCAPE run and refreshes the copies in docs/eval/:
-# every built-in method, CGAL Lindstrom-Turk as the paper's third baseline (when the
-# peers are set up: PEERS_HOME=/tmp/desal-peers bash ../shared/peers/setup.sh), 5 folds,
-# the 1000..6000-vertex sweep. 1-4 minutes on 2 cores (the committed run: 67 s, idle).
+# every built-in method, MeshLab plain and with saliency (when $DESAL_PYTHON, else python3,
+# has pymeshlab: pip install pymeshlab), CGAL Lindstrom-Turk as the paper's third baseline
+# (when the peers are set up: PEERS_HOME=/tmp/desal-peers bash ../shared/peers/setup.sh),
+# 5 folds, the 1000..6000-vertex sweep, under the deformation model $MODEL (default scape).
+# Minutes on 2 cores.
 #
-#   bash docs/eval/reproduce.sh [OUT_DIR]           (default: /tmp/desal-eval-scape)
+#   [MODEL=scape|scape-centroid|lbs] bash docs/eval/reproduce.sh [OUT_DIR]   (default: /tmp/desal-eval-scape)
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/../.." && pwd)
 out=${1:-/tmp/desal-eval-scape}
@@ -21,13 +23,22 @@ if [ -x "$peers/cgal_simplify" ]; then
 else
   echo "note: no CGAL driver at $peers; running without the cgal-lt column" >&2
 fi
-"$repo/target/release/desal" eval "$repo/pipelines/scape.toml" --out "$out" --methods "$methods" --sweep --quiet
+python=${DESAL_PYTHON:-python3}
+if "$python" -c "import pymeshlab" 2>/dev/null; then
+  export DESAL_PYTHON="$python"
+  methods="$methods,meshlab,meshlab-saliency"
+else
+  echo "note: $python has no pymeshlab; running without the meshlab columns" >&2
+fi
+model=${MODEL:-scape}
+"$repo/target/release/desal" eval "$repo/pipelines/scape.toml" --out "$out" --methods "$methods" --model "$model" --sweep --quiet
 eval_dir="$out/scape/eval"
 dest="$repo/docs/eval"
-cp "$eval_dir/eval.md" "$dest/scape-eval.md"
-cp "$eval_dir/sweep.json" "$dest/scape-sweep.json"
+suffix=""; [ "$model" = scape ] || suffix="-$model"
+cp "$eval_dir/eval.md" "$dest/scape-eval$suffix.md"
+cp "$eval_dir/sweep.json" "$dest/scape-sweep$suffix.json"
 for png in sweep.png deformation.png face-area/qslim-optimal.png face-area/paper-optimal.png \
            errors/qslim-optimal-rms.png errors/paper-optimal-rms.png errors/paper-subset-rms.png; do
-  cp "$eval_dir/$png" "$dest/$(echo "$png" | tr / -)"
+  cp "$eval_dir/$png" "$dest/$(echo "$png" | tr / - | sed "s/\.png$/$suffix.png/")"
 done
 echo "eval.md, eval.json and every figure: $eval_dir; copies in docs/eval/"

@@ -98,15 +98,7 @@ pub fn deform(
     model: &PoseModel,
 ) -> Result<Deformed> {
     let started = Instant::now();
-    let fit = desal_fit::fit_pose_set(set, labels, &desal_fit::FitConfig::default(), &desal_mesh::NoProgress)
-        .context("stage 1 on the simplified pose set")?;
-    let transforms: Vec<Vec<PartTransform>> = fit
-        .part_fits
-        .iter()
-        .map(|parts| {
-            parts.iter().map(|f| PartTransform { rotation: f.linear, translation: f.translation }).collect()
-        })
-        .collect();
+    let transforms = part_motions(set, labels).context("stage 1 on the simplified pose set")?;
     let rotation_seconds = started.elapsed().as_secs_f64();
     let centroids: Vec<Vec3> = set.poses.iter().map(|p| centroid(p)).collect();
     let inputs = ModelInputs { set, labels, transforms: &transforms, centroids: &centroids, model };
@@ -126,6 +118,20 @@ pub fn deform(
         models.push(run);
     }
     Ok(Deformed { in_sample, held_out, fold_of_pose, models, rotation_seconds })
+}
+
+/// Stage 1's rigid motion of every part in every pose of `set` (`[pose][part]`), what
+/// every deformation model is driven by.
+pub fn part_motions(set: &PoseSet, labels: &PartLabels) -> Result<Vec<Vec<PartTransform>>> {
+    let fit =
+        desal_fit::fit_pose_set(set, labels, &desal_fit::FitConfig::default(), &desal_mesh::NoProgress)?;
+    Ok(fit
+        .part_fits
+        .iter()
+        .map(|parts| {
+            parts.iter().map(|f| PartTransform { rotation: f.linear, translation: f.translation }).collect()
+        })
+        .collect())
 }
 
 /// What every fit of one set's model reads.

@@ -65,6 +65,9 @@ pub struct EvalArgs {
     /// blend skinning with the parts as bones).
     #[arg(long, default_value = measure::DEFAULT_MODEL)]
     pub model: String,
+    /// Skip the model's own floor (the model fitted and measured at full resolution).
+    #[arg(long)]
+    pub no_floor: bool,
     /// Number of held-out folds over the non-template poses (at least 2).
     #[arg(long, default_value_t = 5)]
     pub folds: usize,
@@ -196,6 +199,22 @@ fn evaluate_dataset(
         prepared.push((method.clone(), set, deformed, up));
     }
 
+    // The model's own floor: the same model on the full-resolution set, the same folds.
+    let floor = if args.no_floor {
+        None
+    } else {
+        let floor_started = Instant::now();
+        let floor =
+            model_floor(&inputs, model, args.folds).context("the model's floor at full resolution")?;
+        let seconds = floor_started.elapsed().as_secs_f64();
+        log(&format!(
+            "the model at full resolution: held-out v2v {:.3e}, {:.2}x in-sample ({seconds:.2} s)",
+            floor.held_out.v2v,
+            floor.v2v_ratio()
+        ));
+        Some(report::FloorReport::new(&floor, seconds))
+    };
+
     // Step 3: every deformed pose against both ground truths.
     let measure_started = Instant::now();
     let runs: Vec<Run> = prepared
@@ -222,6 +241,7 @@ fn evaluate_dataset(
     let mut report =
         build_report(pipeline, dataset, &inputs, target, &folds, &evaluated, &runs, &regions, &fitted);
     report.model = args.model.clone();
+    report.floor = floor;
     report.measure_seconds = measure_seconds;
     let eval_dir = dataset.out_dir.join("eval");
     desal_io::replace_dir(&eval_dir, &[], |dir| -> Result<()> {
@@ -242,6 +262,13 @@ fn evaluate_dataset(
         Ok(())
     })?;
     Ok(eval_dir)
+}
+
+/// [`desal_eval::model_floor`] of `model` on the full-resolution pose set, driven by
+/// stage 1's rigid fit of that set, with `k` folds (the method runs' own).
+fn model_floor(inputs: &Inputs, model: &desal_eval::PoseModel, k: usize) -> Result<desal_eval::ModelFloor> {
+    let transforms = measure::part_motions(&inputs.poses, &inputs.labels)?;
+    Ok(desal_eval::model_floor(&inputs.poses, &inputs.labels, &transforms, model, k)?)
 }
 
 /// What every method reads, from the pipeline stages' results.
@@ -309,6 +336,7 @@ fn build_report(
         methods,
         joint_band_radius: regions.radius,
         model: String::new(),
+        floor: None,
         measure_seconds: 0.0,
         total_seconds: 0.0,
     }
