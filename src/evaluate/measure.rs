@@ -68,7 +68,7 @@ pub struct Deformed {
 }
 
 /// The deformation models `desal eval --model` offers, by name.
-pub const MODELS: &[&str] = &["scape", "scape-centroid", "lbs"];
+pub const MODELS: &[&str] = &["scape", "scape-cv", "scape-centroid", "lbs"];
 
 /// The model `desal eval` uses when none is named: the part-anchored SCAPE model, the
 /// lowest held-out error at full resolution on SCAPE (6.77e-5 m² v2v, against 1.79e-4
@@ -79,6 +79,10 @@ pub const DEFAULT_MODEL: &str = "scape";
 pub fn pose_model(name: &str) -> Result<PoseModel> {
     Ok(match name {
         "scape" => PoseModel::Scape(ModelConfig::default()),
+        "scape-cv" => PoseModel::Scape(ModelConfig {
+            regression: desal_eval::Regression::CrossValidated,
+            ..ModelConfig::default()
+        }),
         "scape-centroid" => PoseModel::Scape(ModelConfig {
             anchoring: desal_eval::Anchoring::Centroid,
             ..ModelConfig::default()

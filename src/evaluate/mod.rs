@@ -61,8 +61,9 @@ pub struct EvalArgs {
     #[arg(long, value_delimiter = ',', default_value = "all")]
     pub methods: Vec<String>,
     /// The deformation model: scape (part-anchored, the default: the lowest held-out
-    /// error at full resolution), scape-centroid (the paper's placement), lbs (linear
-    /// blend skinning with the parts as bones).
+    /// error at full resolution), scape-cv (its ridge and features cross-validated in
+    /// each training fold), scape-centroid (the paper's placement), lbs (linear blend
+    /// skinning with the parts as bones).
     #[arg(long, default_value = measure::DEFAULT_MODEL)]
     pub model: String,
     /// Skip the model's own floor (the model fitted and measured at full resolution).

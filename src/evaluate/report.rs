@@ -37,7 +37,7 @@ pub struct EvalReport {
     pub methods: Vec<MethodReport>,
     /// Half-width of the joint bands of the region table, input units.
     pub joint_band_radius: f64,
-    /// The deformation model (`desal eval --model`): `scape`, `scape-centroid` or `lbs`.
+    /// The deformation model (`desal eval --model`): `scape`, `scape-cv`, `scape-centroid` or `lbs`.
     pub model: String,
     /// The model's own error at full resolution (`None` with `--no-floor`).
     pub floor: Option<FloorReport>,
@@ -253,6 +253,9 @@ fn model_description(model: &str) -> &'static str {
     match model {
         "scape" => {
             "`scape`: the SCAPE pose-deformation model, each part's rigid-fit translation a soft anchor of the Poisson solve"
+        }
+        "scape-cv" => {
+            "`scape-cv`: the part-anchored SCAPE model, its ridge and joint features chosen by leave-one-out cross-validation inside each training fold"
         }
         "scape-centroid" => {
             "`scape-centroid`: the SCAPE pose-deformation model placed at the ground truth's centroid, as in the paper"

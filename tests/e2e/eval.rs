@@ -305,6 +305,9 @@ fn the_deformation_model_is_chosen_by_name_and_recorded() {
     };
     let (anchored, centroid, lbs) = (held_out("scape"), held_out("scape-centroid"), held_out("lbs"));
     assert!(anchored < 0.5 * centroid, "anchored {anchored:e} vs centroid {centroid:e} m²");
+    // Cross-validating the ridge inside each fold is anchored too, and not the same fit.
+    let cv = held_out("scape-cv");
+    assert!(cv < 0.5 * centroid && cv != anchored, "cv {cv:e}, anchored {anchored:e}, centroid {centroid:e}");
     // The last run (lbs) has its own floor; the default model's floor on the sample's 11
     // poses holds up held out (issue 17: held-out / in-sample below 3).
     let report = eval_ok(&pipeline, "qslim-optimal", &[]);
@@ -360,7 +363,7 @@ fn bad_requests_fail_with_a_clear_message_and_leave_no_eval_folder() {
     let out = desal_eval(&[p, "--model", "smpl", "--quiet"]);
     assert!(!out.status.success());
     assert!(
-        stderr(&out).contains("unknown deformation model 'smpl': use scape, scape-centroid, lbs"),
+        stderr(&out).contains("unknown deformation model 'smpl': use scape, scape-cv, scape-centroid, lbs"),
         "{}",
         stderr(&out)
     );
