@@ -423,7 +423,7 @@ impl Engine {
     /// changes.
     fn perform_edge_collapses(
         &mut self,
-        order: &[[u32; 2]],
+        order: &[u128],
         target: &StopAt,
         pass: Pass,
         marks: &mut ScratchMarks,
@@ -432,7 +432,7 @@ impl Engine {
             Pass::Batched => {
                 let wanted = target.remaining(self).max(1);
                 let mut chosen = Vec::with_capacity(wanted.min(order.len()));
-                for &[a, b] in order {
+                for [a, b] in order.iter().map(|&packed| unpack_edge(packed)) {
                     if chosen.len() == wanted {
                         break;
                     }
@@ -453,7 +453,7 @@ impl Engine {
                 }
             }
             Pass::Exhaustive => {
-                for &[a, b] in order {
+                for [a, b] in order.iter().map(|&packed| unpack_edge(packed)) {
                     if target.reached(self) {
                         break;
                     }
@@ -565,32 +565,60 @@ impl Engine {
     }
 }
 
-/// Pass, step 3: the edges this pass may perform, cheapest first (ties by `(lo, hi)`).
-/// A batched pass keeps only costs up to `PASS_ERROR_FACTOR` times the cost of the
-/// `needed`-th cheapest (capped by `PASS_GOAL_FRACTION`); an exhaustive one keeps every
-/// finite cost.
-fn sort_edge_collapses(ranked: &EdgeCosts, needed: usize, pass: Pass) -> Vec<[u32; 2]> {
+/// Pass, step 3: the edges this pass may perform, cheapest first (ties by `(lo, hi)`),
+/// each packed by [`pack_collapse`]. A batched pass keeps only costs up to
+/// `PASS_ERROR_FACTOR` times the cost of the `needed`-th cheapest (capped by
+/// `PASS_GOAL_FRACTION`); an exhaustive one keeps every finite cost.
+fn sort_edge_collapses(ranked: &EdgeCosts, needed: usize, pass: Pass) -> Vec<u128> {
     let count = ranked.chunks.iter().map(|c| c.costs.len()).sum::<usize>();
     let mut limit = f64::INFINITY;
     if pass == Pass::Batched && count > 0 {
         let goal = ((needed as f64 * PASS_GOAL_FRACTION).ceil() as usize).clamp(1, count);
-        let mut scratch = Vec::with_capacity(count);
+        // Selecting on `f64::total_cmp`'s integer key orders exactly as `total_cmp`
+        // does, at one integer comparison each.
+        let mut keys = Vec::with_capacity(count);
         for c in &ranked.chunks {
-            scratch.extend_from_slice(&c.costs);
+            keys.extend(c.costs.iter().map(|&cost| total_order_key(cost)));
         }
-        let (_, nth, _) = scratch.select_nth_unstable_by(goal - 1, f64::total_cmp);
-        limit = *nth * PASS_ERROR_FACTOR;
+        let (_, &mut nth, _) = keys.select_nth_unstable(goal - 1);
+        limit = from_total_order_key(nth) * PASS_ERROR_FACTOR;
     }
-    // Non-negative finite f64 bit patterns order like the values; `(lo, hi)` packed
-    // into a u64 orders like the pair.
-    let mut order: Vec<(u64, u64)> = Vec::new();
+    let mut order: Vec<u128> = Vec::new();
     for c in &ranked.chunks {
-        for (&cost, &[lo, hi]) in c.costs.iter().zip(&c.edges) {
+        for (&cost, &edge) in c.costs.iter().zip(&c.edges) {
             if cost.is_finite() && cost <= limit {
-                order.push((cost.to_bits(), (u64::from(lo) << 32) | u64::from(hi)));
+                order.push(pack_collapse(cost, edge));
             }
         }
     }
     order.sort_unstable();
-    order.into_iter().map(|(_, e)| [(e >> 32) as u32, e as u32]).collect()
+    order
+}
+
+/// One ranked collapse as one integer that orders by cost, then by `(lo, hi)`: a
+/// non-negative finite f64's bit pattern orders like its value (bits 64..128), and
+/// `(lo, hi)` packed below orders like the pair. One integer comparison per step of
+/// the sort, where a tuple needs two.
+#[inline]
+fn pack_collapse(cost: f64, [lo, hi]: [u32; 2]) -> u128 {
+    (u128::from(cost.to_bits()) << 64) | (u128::from(lo) << 32) | u128::from(hi)
+}
+
+/// The edge of a [`pack_collapse`]d collapse.
+#[inline]
+fn unpack_edge(packed: u128) -> [u32; 2] {
+    [(packed >> 32) as u32, packed as u32]
+}
+
+/// The integer whose order is `f64::total_cmp`'s (the transform `total_cmp` applies).
+#[inline]
+fn total_order_key(x: f64) -> i64 {
+    let bits = x.to_bits() as i64;
+    bits ^ ((((bits >> 63) as u64) >> 1) as i64)
+}
+
+/// The inverse of [`total_order_key`].
+#[inline]
+fn from_total_order_key(key: i64) -> f64 {
+    f64::from_bits((key ^ ((((key >> 63) as u64) >> 1) as i64)) as u64)
 }
