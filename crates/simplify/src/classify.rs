@@ -24,13 +24,6 @@ pub(crate) const PINNED: u8 = 8;
 /// Vertices (or faces, or edges) per work item of the parallel passes.
 pub(crate) const CHUNK: usize = 2048;
 
-/// An input face's unnormalised normal and its length (one cache line holds two).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct InputNormal {
-    pub(crate) normal: Vec3,
-    pub(crate) length: f64,
-}
-
 /// The plane of every face of one pose (whose quadric is the face's), in face order.
 pub(crate) fn fill_face_planes(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<FacePlane> {
     faces
@@ -43,25 +36,25 @@ pub(crate) fn fill_face_planes(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<Fa
 }
 
 /// The unnormalised normal of every face (template pose, input coordinates): what the
-/// fold-over safeguard compares surviving faces with.
-pub(crate) fn compute_input_normals(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<InputNormal> {
+/// fold-over safeguard compares surviving faces with. Its length is recomputed where
+/// it is needed (the same value, bit for bit): storing it took 8 of 32 bytes per face.
+pub(crate) fn compute_input_normals(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<Vec3> {
     faces
         .par_iter()
         .map(|f| {
             let [a, b, c] = f.map(|v| positions[v as usize]);
-            let normal = (b - a).cross(&(c - a));
-            InputNormal { normal, length: normal.norm() }
+            (b - a).cross(&(c - a))
         })
         .collect()
 }
 
 /// The unit area-weighted normal of every vertex (zero for an isolated vertex): the
 /// surface's orientation where the vertex came from.
-pub(crate) fn compute_vertex_normals(lists: &FaceLists, input_normals: &[InputNormal]) -> Vec<Vec3> {
+pub(crate) fn compute_vertex_normals(lists: &FaceLists, input_normals: &[Vec3]) -> Vec<Vec3> {
     (0..lists.slot_count() as u32)
         .into_par_iter()
         .map(|v| {
-            let sum: Vec3 = lists.of(v).iter().map(|&f| input_normals[f as usize].normal).sum();
+            let sum: Vec3 = lists.of(v).iter().map(|&f| input_normals[f as usize]).sum();
             let length = sum.norm();
             if length > 0.0 { sum / length } else { Vec3::zeros() }
         })

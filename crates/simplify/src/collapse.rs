@@ -36,8 +36,8 @@ use desal_mesh::{Progress, TriMesh, Vec3};
 use rayon::prelude::*;
 
 use crate::classify::{
-    ALIVE, BOUNDARY, CHUNK, ClassifyInput, FROZEN, InputNormal, PINNED, classify_vertices,
-    compute_input_normals, compute_vertex_normals, fill_face_planes,
+    ALIVE, BOUNDARY, CHUNK, ClassifyInput, FROZEN, PINNED, classify_vertices, compute_input_normals,
+    compute_vertex_normals, fill_face_planes,
 };
 use crate::config::{Metric, Placement, SimplifyConfig, Target};
 use crate::error::SimplifyError;
@@ -226,10 +226,9 @@ pub(crate) struct Engine {
     /// cheap neighbour.
     pub(crate) weights: Option<Vec<f64>>,
     pub(crate) lists: FaceLists,
-    /// Unnormalised normal of every input face in the template and its length: a
-    /// collapse may not turn a face past the threshold from it either, since small
-    /// steps add up.
-    pub(crate) input_normals: Vec<InputNormal>,
+    /// Unnormalised normal of every input face in the template: a collapse may not
+    /// turn a face past the threshold from it either, since small steps add up.
+    pub(crate) input_normals: Vec<Vec3>,
     /// Unit area-weighted normal of every input vertex (template pose): the local
     /// surface orientation where a slot's vertex came from, whatever faces it has now.
     pub(crate) vertex_normals: Vec<Vec3>,

@@ -115,7 +115,7 @@ impl Engine {
                 return Err(Refusal::Flip);
             }
             let input = &self.input_normals[f as usize];
-            if new.dot(&input.normal) <= self.params.cos_max_rotation * input.length * twice_area {
+            if new.dot(input) <= self.params.cos_max_rotation * input.norm() * twice_area {
                 return Err(Refusal::Flip);
             }
             // The corners' input normals summed, `moved`'s counting for both merged
