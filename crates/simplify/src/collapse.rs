@@ -273,8 +273,6 @@ impl Engine {
         // Each face's plane quadric once (a vertex sums those of its faces). Several
         // poses would need one per face and pose: those are computed where summed.
         let face_planes = (pose_count == 1).then(|| fill_face_planes(lists.faces(), &local[0]));
-        let input_normals = compute_input_normals(lists.faces(), &mesh.positions);
-        let vertex_normals = compute_vertex_normals(&lists, &input_normals);
         let (flags, quadrics) = classify_vertices(&ClassifyInput {
             lists: &lists,
             poses: &local,
@@ -282,6 +280,11 @@ impl Engine {
             part_labels,
             config,
         });
+        // The planes go before the normals come: the two are never in memory together
+        // (on a million faces, 40 and 36 MB at the run's peak).
+        drop(face_planes);
+        let input_normals = compute_input_normals(lists.faces(), &mesh.positions);
+        let vertex_normals = compute_vertex_normals(&lists, &input_normals);
         let live_vertices = (0..n as u32).filter(|&v| lists.count(v) > 0).count();
         let locked_vertices = flags.iter().filter(|&&f| f & (FROZEN | PINNED) != 0).count();
         let mut pose_positions = local;
