@@ -254,8 +254,8 @@ pub(crate) struct Engine {
 }
 
 impl Engine {
-    /// Phase 1: centre the positions, fill the face quadrics and input normals, the
-    /// vertex normals, then classify every vertex and fill its quadric (`classify.rs`).
+    /// Phase 1: centre the positions, classify every vertex and fill its quadric from
+    /// the face planes, then fill the input and vertex normals (`classify.rs`).
     pub(crate) fn new(
         poses: &[&[Vec3]],
         template: usize,
@@ -281,7 +281,7 @@ impl Engine {
             config,
         });
         // The planes go before the normals come: the two are never in memory together
-        // (on a million faces, 40 and 36 MB at the run's peak).
+        // (on a million faces, 40 and 36 MB, the allocated heap's peak when they were).
         drop(face_planes);
         let input_normals = compute_input_normals(lists.faces(), &mesh.positions);
         let vertex_normals = compute_vertex_normals(&lists, &input_normals);
