@@ -24,13 +24,6 @@ pub(crate) const PINNED: u8 = 8;
 /// Vertices (or faces, or edges) per work item of the parallel passes.
 pub(crate) const CHUNK: usize = 2048;
 
-/// An input face's unnormalised normal and its length (one cache line holds two).
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct InputNormal {
-    pub(crate) normal: Vec3,
-    pub(crate) length: f64,
-}
-
 /// The plane of every face of one pose (whose quadric is the face's), in face order.
 pub(crate) fn fill_face_planes(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<FacePlane> {
     faces
@@ -43,25 +36,25 @@ pub(crate) fn fill_face_planes(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<Fa
 }
 
 /// The unnormalised normal of every face (template pose, input coordinates): what the
-/// fold-over safeguard compares surviving faces with.
-pub(crate) fn compute_input_normals(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<InputNormal> {
+/// fold-over safeguard compares surviving faces with. Its length is recomputed where
+/// it is needed (the same value, bit for bit): storing it took 8 of 32 bytes per face.
+pub(crate) fn compute_input_normals(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<Vec3> {
     faces
         .par_iter()
         .map(|f| {
             let [a, b, c] = f.map(|v| positions[v as usize]);
-            let normal = (b - a).cross(&(c - a));
-            InputNormal { normal, length: normal.norm() }
+            (b - a).cross(&(c - a))
         })
         .collect()
 }
 
 /// The unit area-weighted normal of every vertex (zero for an isolated vertex): the
 /// surface's orientation where the vertex came from.
-pub(crate) fn compute_vertex_normals(lists: &FaceLists, input_normals: &[InputNormal]) -> Vec<Vec3> {
+pub(crate) fn compute_vertex_normals(lists: &FaceLists, input_normals: &[Vec3]) -> Vec<Vec3> {
     (0..lists.slot_count() as u32)
         .into_par_iter()
         .map(|v| {
-            let sum: Vec3 = lists.of(v).iter().map(|&f| input_normals[f as usize].normal).sum();
+            let sum: Vec3 = lists.of(v).iter().map(|&f| input_normals[f as usize]).sum();
             let length = sum.norm();
             if length > 0.0 { sum / length } else { Vec3::zeros() }
         })
@@ -118,18 +111,18 @@ struct Constraints {
 /// faces or its faces form more than one fan (a pinch, like SCAPE's vertex 419).
 fn classify_vertex(input: &ClassifyInput<'_>, link: &Link, v: u32) -> (u8, Constraints) {
     let config = input.config;
-    let fans = (0..link.neighbours.len()).filter(|&i| link.parent[i] == i).count();
+    let fans = link.neighbours.iter().enumerate().filter(|&(i, x)| x.parent as usize == i).count();
     let mut flags = if input.lists.of(v).is_empty() { 0 } else { ALIVE };
-    let on_boundary = link.counts.contains(&1);
+    let on_boundary = link.neighbours.iter().any(|x| x.faces == 1);
     if on_boundary {
         flags |= BOUNDARY;
     }
-    if fans > 1 || link.counts.iter().any(|&c| c > 2) {
+    if fans > 1 || link.neighbours.iter().any(|x| x.faces > 2) {
         flags |= FROZEN;
     }
     let label_of = |x: u32| input.part_labels.map(|l| l[x as usize]);
     let on_part_border =
-        input.part_labels.is_some() && link.neighbours.iter().any(|&x| label_of(x) != label_of(v));
+        input.part_labels.is_some() && link.neighbours.iter().any(|x| label_of(x.vertex) != label_of(v));
     if on_part_border && config.part_borders == PartBorders::Lock {
         flags |= PINNED;
     }
@@ -185,52 +178,58 @@ fn fill_vertex_quadrics(
 }
 
 /// The link of one vertex: its neighbours, how many of its faces each shares, and a
-/// union-find over them whose roots count the fans.
+/// union-find over them whose roots count the fans. One entry per neighbour (one push
+/// each, where three parallel arrays took three).
 #[derive(Debug, Default)]
 struct Link {
-    neighbours: Vec<u32>,
-    counts: Vec<u32>,
-    parent: Vec<usize>,
+    neighbours: Vec<LinkNeighbour>,
+}
+
+/// One neighbour in a [`Link`].
+#[derive(Debug, Clone, Copy)]
+struct LinkNeighbour {
+    vertex: u32,
+    /// How many of the vertex's faces this neighbour is a corner of.
+    faces: u32,
+    /// Union-find parent, an index into `Link::neighbours`.
+    parent: u32,
 }
 
 impl Link {
     /// Rebuilds the link of `v` from its faces.
     fn gather(&mut self, lists: &FaceLists, v: u32) {
         self.neighbours.clear();
-        self.counts.clear();
-        self.parent.clear();
         for &f in lists.of(v) {
             let [x, y] = others(lists.face(f), v);
             let (i, j) = (self.slot(x), self.slot(y));
-            self.counts[i] += 1;
-            self.counts[j] += 1;
+            self.neighbours[i].faces += 1;
+            self.neighbours[j].faces += 1;
             let (ri, rj) = (self.root(i), self.root(j));
-            self.parent[ri.max(rj)] = ri.min(rj);
+            self.neighbours[ri.max(rj)].parent = ri.min(rj) as u32;
         }
     }
 
     /// How many of the vertex's faces neighbour `x` shares (1: a boundary edge).
     fn faces_shared(&self, x: u32) -> u32 {
-        let i = self.neighbours.iter().position(|&n| n == x).expect("a neighbour");
-        self.counts[i]
+        self.neighbours.iter().find(|n| n.vertex == x).expect("a neighbour").faces
     }
 
     fn slot(&mut self, x: u32) -> usize {
-        match self.neighbours.iter().position(|&n| n == x) {
+        match self.neighbours.iter().position(|n| n.vertex == x) {
             Some(i) => i,
             None => {
-                self.neighbours.push(x);
-                self.counts.push(0);
-                self.parent.push(self.parent.len());
-                self.neighbours.len() - 1
+                let i = self.neighbours.len();
+                self.neighbours.push(LinkNeighbour { vertex: x, faces: 0, parent: i as u32 });
+                i
             }
         }
     }
 
     fn root(&mut self, mut i: usize) -> usize {
-        while self.parent[i] != i {
-            self.parent[i] = self.parent[self.parent[i]];
-            i = self.parent[i];
+        let n = &mut self.neighbours;
+        while n[i].parent as usize != i {
+            n[i].parent = n[n[i].parent as usize].parent;
+            i = n[i].parent as usize;
         }
         i
     }

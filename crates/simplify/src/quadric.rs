@@ -177,7 +177,7 @@ impl Quadric {
             (c01 * b0 + c11 * b1 + c12 * b2) * inv,
             (c02 * b0 + c12 * b1 + c22 * b2) * inv,
         );
-        p.iter().all(|x| x.is_finite()).then_some(p)
+        (p.x.is_finite() && p.y.is_finite() && p.z.is_finite()).then_some(p)
     }
 
     /// The point of segment `[p0, p1]` minimising the quadric, or `None` when the

@@ -95,7 +95,10 @@ impl Engine {
             }
             let corners = face.map(|v| self.positions[v as usize]);
             let old = (corners[1] - corners[0]).cross(&(corners[2] - corners[0]));
-            let new_corners = [0, 1, 2].map(|i| if face[i] == moved { *position } else { corners[i] });
+            // `moved` is exactly one corner: the face is in its list, and has three.
+            let at = face.iter().position(|&v| v == moved).expect("a face of `moved`");
+            let mut new_corners = corners;
+            new_corners[at] = *position;
             let e0 = new_corners[1] - new_corners[0];
             let e1 = new_corners[2] - new_corners[0];
             let e2 = new_corners[2] - new_corners[1];
@@ -112,14 +115,16 @@ impl Engine {
                 return Err(Refusal::Flip);
             }
             let input = &self.input_normals[f as usize];
-            if new.dot(&input.normal) <= self.params.cos_max_rotation * input.length * twice_area {
+            if new.dot(input) <= self.params.cos_max_rotation * input.norm() * twice_area {
                 return Err(Refusal::Flip);
             }
+            // The corners' input normals summed, `moved`'s counting for both merged
+            // vertices (only the sign of a zero sum differs from starting at zero, and
+            // the comparison below cannot see it).
             let n = &self.vertex_normals;
-            let reference: Vec3 = face
-                .iter()
-                .map(|&v| if v == moved { n[v as usize] + n[other as usize] } else { n[v as usize] })
-                .sum();
+            let mut normals = face.map(|v| n[v as usize]);
+            normals[at] += n[other as usize];
+            let reference = normals[0] + normals[1] + normals[2];
             if new.dot(&reference) <= self.params.cos_max_corner_normal * reference.norm() * twice_area {
                 return Err(Refusal::Fold);
             }
