@@ -62,6 +62,36 @@ fn the_rig_sample_simplifies_to_a_rig_with_its_skeleton_and_exact_weights() {
     };
     let inputs: HashSet<Vec<u32>> = (0..original.mesh.vertex_count()).map(|v| key(&original, v)).collect();
     assert!((0..simplified.mesh.vertex_count()).all(|v| inputs.contains(&key(&simplified, v))));
+    check_viewer(&folder);
+}
+
+/// `view.html` and the vendored three.js files beside it: the files are the vendored
+/// bytes, and the page loads nothing over the network (every module an inlined `data:`
+/// URL, no `src`/`href` to fetch, no `http(s)://` outside the inlined base64).
+fn check_viewer(folder: &Path) {
+    use desal_rig::viewer::{MODULES, VENDORED};
+    for file in VENDORED {
+        let written = std::fs::read(folder.join("viewer/three").join(file.path)).unwrap();
+        assert!(written == file.bytes, "viewer/three/{} is not the vendored file", file.path);
+    }
+    let html = std::fs::read_to_string(folder.join("view.html")).unwrap();
+    let opening = "<script type=\"importmap\">";
+    let map_start = html.find(opening).expect("an import map") + opening.len();
+    let map_end = map_start + html[map_start..].find("</script>").unwrap();
+    let map: serde_json::Value = serde_json::from_str(&html[map_start..map_end]).unwrap();
+    let imports = map["imports"].as_object().unwrap();
+    assert_eq!(imports.len(), MODULES.len());
+    for (name, url) in imports {
+        assert!(url.as_str().unwrap().starts_with("data:text/javascript;base64,"), "{name} is not inlined");
+    }
+    // Outside the base64 payloads (the import map and the rigs' JSON), the page's own text.
+    let data_start = html.find("<script id=\"desal-data\"").unwrap();
+    let data_end = data_start + html[data_start..].find("</script>").unwrap();
+    let text = format!("{}{}{}", &html[..map_start], &html[map_end..data_start], &html[data_end..]);
+    for needle in ["http://", "https://", " src=", " href=", "fetch(", "import("] {
+        assert!(!text.contains(needle), "view.html contains {needle:?}");
+    }
+    assert!(html.contains("window.desalView"), "the test hook");
 }
 
 #[test]
