@@ -87,6 +87,16 @@ pub struct MapArgs {
     /// `vertex_map.txt`).
     #[arg(long)]
     pub out_dir: Option<PathBuf>,
+    /// Also write the simplified rig here (`.glb`), for a pose set that `desal run`
+    /// ingested from a skinned glTF rig: its skeleton, inverse bind matrices and
+    /// animations with the simplified mesh, as `simplified.glb` (exact weights for
+    /// desal's subset placement, weights refitted over the poses otherwise). Needs `--rig`.
+    #[arg(long, requires = "rig")]
+    pub glb: Option<PathBuf>,
+    /// The `.glb`/`.gltf` rig the pose set was ingested from; its bytes must be those the
+    /// pose set records, and its `[dataset.rig]` settings are read from the pose set.
+    #[arg(long, requires = "glb")]
+    pub rig: Option<PathBuf>,
 }
 
 /// `desal simplify`: stage 3 on a plain mesh, optionally weighted by saliency.
@@ -229,7 +239,12 @@ pub fn saliency(args: &SaliencyArgs) -> Result<()> {
 }
 
 pub fn map(args: &MapArgs) -> Result<()> {
-    let (poses, poses_hash) = read::<PoseSetV1>(&args.poses)?;
+    let (producer, poses, poses_hash) = artifact::read_artifact::<PoseSetV1>(&args.poses)?;
+    // Checked before any work: the rig must be the one the pose set came from.
+    let rig = match &args.rig {
+        Some(file) => Some(stages::rig::source_of_pose_set(&producer, &args.poses, file)?),
+        None => None,
+    };
     let (labels, _) = read::<LabelsV1>(&args.labels)?;
     let set = poses.to_pose_set().with_context(|| format!("{}", args.poses.display()))?;
     let labels = labels.to_labels().with_context(|| format!("{}", args.labels.display()))?;
@@ -248,14 +263,29 @@ pub fn map(args: &MapArgs) -> Result<()> {
     let out = stages::map::compute(&simplified, &set, &labels)
         .with_context(|| format!("mapping {} onto {}", args.simplified.display(), args.poses.display()))?;
     let (simple_set, simple_labels) = stages::map::apply(&out.body, &set, &labels)?;
+    // The rig is built before anything is written: one that cannot be built writes nothing.
+    let glb = match (&args.glb, &rig) {
+        (Some(path), Some(rig)) => Some((path, stages::rig::simplified_glb(rig, &simplified, &out.body)?)),
+        _ => None,
+    };
     // The folder first, whole or not at all (it is the step that fails on a bad path),
-    // and then no artifact claims a result that was not written.
+    // then the rig, and then no artifact claims a result that was not written.
     if let Some(dir) = &args.out_dir {
         crate::outputs::check_output_folder(dir)?;
         let files = crate::outputs::simplified_pose_set("", &out.body, simple_set, simple_labels);
         desal_io::replace_dir(dir, &[], |tmp| -> Result<()> {
             crate::outputs::DatasetOutputs { artifacts: Vec::new(), files }.write_into(tmp)
         })?;
+    }
+    if let Some((path, (bytes, summary))) = &glb {
+        desal_io::write_atomic(path, bytes)?;
+        eprintln!(
+            "wrote {}: {} vertices, {} faces, weights {}",
+            path.display(),
+            summary.output_vertices,
+            summary.output_faces,
+            summary.weights
+        );
     }
     artifact::write_artifact(&args.output, &key.producer(&[]), &out.body)?;
     done(&out.note, &args.output);

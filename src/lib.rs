@@ -16,6 +16,7 @@ pub mod pipeline;
 pub mod progress;
 pub mod run;
 pub mod stages;
+pub mod viewer;
 
 /// Prints an error chain the way every desal binary does, and returns the exit code.
 pub fn report_error(error: &anyhow::Error) -> std::process::ExitCode {

@@ -6,16 +6,20 @@
 //! through the pose-set artifact's f32 (`PoseSetV1`), as `desal run`'s do, and every
 //! stage is computed by the same `stages::*::compute` call in the same order.
 
+use std::path::Path;
+
 use anyhow::{Context, Result, bail};
-use desal_io::artifact::{FitV1, HierarchyLevelV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1};
+use desal_io::artifact::{FitV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1};
 use desal_io::npz::HierarchyArrays;
 use desal_mesh::validate::clean_faces;
 use desal_mesh::{FaceCleanup, PartLabels, PoseSet, Progress};
 
 use crate::stages::fit::{FitParams, FitSummary};
 use crate::stages::hierarchy::{self, HierarchyParams, LevelSettings, LevelSummary};
+use crate::stages::ingest::{IngestSummary, LabelsSummary};
 use crate::stages::map::{self, MapSummary};
 use crate::stages::parts::{self, PartsParams, PartsSummary};
+use crate::stages::rig::{RigInput, RigParams, SimplifiedRigSummary};
 use crate::stages::runner::StageOutput;
 use crate::stages::saliency::{SaliencyParams, SaliencySummary};
 use crate::stages::simplify::{self, SimplifyParams, SimplifySummary};
@@ -145,6 +149,39 @@ pub fn simplify_pose_set(
     };
     let map = map::compute(&simplified.body, set, labels)?;
     Ok(Simplification { fit, saliency, simplified, map })
+}
+
+/// A skinned glTF rig simplified as `desal run` simplifies a `[dataset.rig]`: the bytes of
+/// its `simplified.glb` and every stage's result.
+#[derive(Debug, Clone)]
+pub struct RigSimplification {
+    /// The simplified rig (`.glb`), the bytes `desal run` writes as `simplified.glb`.
+    pub glb: Vec<u8>,
+    pub rig: SimplifiedRigSummary,
+    pub ingest: StageOutput<PoseSetV1, IngestSummary>,
+    pub labels: StageOutput<LabelsV1, LabelsSummary>,
+    pub stages: Simplification,
+}
+
+/// Ingest and dominant-joint labels of the rig in `file` (read with the `[dataset.rig]`
+/// settings `rig`), stages 1–4 as [`simplify_pose_set`] runs them, and the simplified
+/// rig through the one rig writer (`stages::rig::simplified_glb`).
+pub fn simplify_rig(
+    file: &Path,
+    rig: &RigParams,
+    params: &StageParams,
+    multipose: bool,
+    progress: &dyn Progress,
+) -> Result<RigSimplification> {
+    let input = RigInput { file, params: rig };
+    let ingest = input.compute_poses()?;
+    let set = ingest.body.to_pose_set().with_context(|| format!("{}", file.display()))?;
+    let labels = input.compute_labels(&set)?;
+    let part_labels = labels.body.to_labels().with_context(|| format!("{}", file.display()))?;
+    let stages = simplify_pose_set(params, &set, &part_labels, multipose, progress)?;
+    let (glb, summary) =
+        crate::stages::rig::simplified_glb(&input.to_owned(), &stages.simplified.body, &stages.map.body)?;
+    Ok(RigSimplification { glb, rig: summary, ingest, labels, stages })
 }
 
 /// The simplified pose set and its labels: `map` applied to every pose of `set`.

@@ -13,6 +13,7 @@
 //! | `hierarchy-<k>.dsa`, `hierarchy.npz`, `hierarchy.json` | with `[dataset.hierarchy]`: each level's cache entry, the npz of every level (`stages::hierarchy::npz_arrays`), the levels' summaries |
 //! | `hierarchy.png`, `upsampling-error.png`, `upsampling-error-<k>.ply` | with `[dataset.hierarchy]`: the levels side by side; the held-out per-vertex upsampling error of each level, fitted against barycentric (RMS, drawn and as PLY properties) |
 //! | `simplified.glb`, `simplified-rig.json` | with `[dataset.rig]`: the simplified rig (`stages::rig::simplified_glb`) and its figures |
+//! | `view.html`, `viewer/three/...` | with `[dataset.rig]`: both rigs side by side in three.js, and the vendored three.js files (`viewer.rs`) |
 //! | `report.json` | the run's report, with `outputs_key` |
 //! | `eval/` | `desal eval`'s, kept across runs |
 
@@ -113,6 +114,9 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
         // Built before anything is written: a rig that cannot be written fails the run
         // with the output folder untouched.
         let (bytes, summary) = crate::stages::rig::simplified_glb(rig, stages.simplified.body()?, map)?;
+        for (name, page) in crate::viewer::view_files(rig, &bytes, &summary)? {
+            outputs.files.push((name, Box::new(move |p| Ok(desal_io::write_atomic(p, &page)?))));
+        }
         outputs
             .files
             .push(("simplified.glb".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, &bytes)?))));

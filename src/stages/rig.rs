@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use desal_io::ContentHash;
-use desal_io::artifact::{ArtifactKind, LabelsV1, MapV1, PoseSetV1, SimplifiedV1};
+use desal_io::artifact::{ArtifactKind, LabelsV1, MapV1, PoseSetV1, Producer, SimplifiedV1};
 use desal_rig::{FrameConfig, PoseSource, PosedRig, ReadOptions, Rig};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
@@ -221,6 +221,46 @@ impl RigInput<'_> {
         let summary = LabelsSummary { parts: labels.names.clone(), vertices_per_part: sizes };
         Ok(StageOutput { body: LabelsV1::from_labels(&labels), summary, note })
     }
+}
+
+/// The rig a pose set was ingested from, for writing its simplified rig outside `desal
+/// run` (`desal map --glb`): the `[dataset.rig]` settings come from the pose set's
+/// producer record, and `file` must hold the very bytes it records (the record keeps the
+/// rig's content hash and file name, never its path).
+pub fn source_of_pose_set(producer: &Producer, poses: &Path, file: &Path) -> Result<RigSource> {
+    if producer.stage != "rig-ingest" {
+        bail!(
+            "{} was made by stage '{}', not from a skinned glTF rig: a simplified rig can only be \
+             written for a pose set that `desal run` ingested from a [dataset.rig]",
+            poses.display(),
+            producer.stage
+        );
+    }
+    if producer.stage_version != RIG_STAGE_VERSION {
+        bail!(
+            "{} was ingested by rig stage version {}, this desal has {}: re-run `desal run` to remake it",
+            poses.display(),
+            producer.stage_version,
+            RIG_STAGE_VERSION
+        );
+    }
+    let params: RigParams = serde_json::from_str(&producer.parameters)
+        .with_context(|| format!("{}: its rig settings cannot be read", poses.display()))?;
+    let recorded = producer
+        .inputs
+        .iter()
+        .find(|i| i.role == "rig")
+        .with_context(|| format!("{}: its producer record names no rig", poses.display()))?;
+    let actual = hash_files(&[file.to_owned()])?[0];
+    if actual != recorded.hash {
+        bail!(
+            "{} is not the rig {} was ingested from (that was '{}', with other bytes)",
+            file.display(),
+            poses.display(),
+            recorded.hint
+        );
+    }
+    Ok(RigSource { file: file.to_owned(), params })
 }
 
 /// `simplified.glb`'s JSON sidecar (`simplified-rig.json`).

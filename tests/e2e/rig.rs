@@ -62,6 +62,36 @@ fn the_rig_sample_simplifies_to_a_rig_with_its_skeleton_and_exact_weights() {
     };
     let inputs: HashSet<Vec<u32>> = (0..original.mesh.vertex_count()).map(|v| key(&original, v)).collect();
     assert!((0..simplified.mesh.vertex_count()).all(|v| inputs.contains(&key(&simplified, v))));
+    check_viewer(&folder);
+}
+
+/// `view.html` and the vendored three.js files beside it: the files are the vendored
+/// bytes, and the page loads nothing over the network (every module an inlined `data:`
+/// URL, no `src`/`href` to fetch, no `http(s)://` outside the inlined base64).
+fn check_viewer(folder: &Path) {
+    use desal_rig::viewer::{MODULES, VENDORED};
+    for file in VENDORED {
+        let written = std::fs::read(folder.join("viewer/three").join(file.path)).unwrap();
+        assert!(written == file.bytes, "viewer/three/{} is not the vendored file", file.path);
+    }
+    let html = std::fs::read_to_string(folder.join("view.html")).unwrap();
+    let opening = "<script type=\"importmap\">";
+    let map_start = html.find(opening).expect("an import map") + opening.len();
+    let map_end = map_start + html[map_start..].find("</script>").unwrap();
+    let map: serde_json::Value = serde_json::from_str(&html[map_start..map_end]).unwrap();
+    let imports = map["imports"].as_object().unwrap();
+    assert_eq!(imports.len(), MODULES.len());
+    for (name, url) in imports {
+        assert!(url.as_str().unwrap().starts_with("data:text/javascript;base64,"), "{name} is not inlined");
+    }
+    // Outside the base64 payloads (the import map and the rigs' JSON), the page's own text.
+    let data_start = html.find("<script id=\"desal-data\"").unwrap();
+    let data_end = data_start + html[data_start..].find("</script>").unwrap();
+    let text = format!("{}{}{}", &html[..map_start], &html[map_end..data_start], &html[data_end..]);
+    for needle in ["http://", "https://", " src=", " href=", "fetch(", "import("] {
+        assert!(!text.contains(needle), "view.html contains {needle:?}");
+    }
+    assert!(html.contains("window.desalView"), "the test hook");
 }
 
 #[test]
@@ -114,4 +144,88 @@ fn a_file_that_is_not_gltf_is_refused_with_its_path() {
     assert!(!out.status.success());
     assert!(stderr(&out).contains("avatar.glb: not a valid glTF 2.0 file"), "{}", stderr(&out));
     assert!(!dir.path().join("out/avatar").exists());
+}
+
+fn desal_map(args: &[&str]) -> std::process::Output {
+    let exe = Path::new(env!("CARGO_BIN_EXE_desal")).with_file_name("desal-map");
+    std::process::Command::new(exe).args(args).output().expect("desal-map runs")
+}
+
+/// `desal-map --glb` writes the rig `desal run` writes from the same stage-3 output, takes
+/// another tool's mesh (weights refitted), and refuses a rig other than the pose set's,
+/// a pose set that did not come from a rig, and `--glb` without `--rig`, writing nothing.
+#[test]
+fn desal_map_writes_the_simplified_rig_of_a_rig_pose_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = std::fs::read(sample_rig()).unwrap();
+    let pipeline = write_rig_pipeline(dir.path(), &input, "target_vertices = 2676\nplacement = \"subset\"");
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let folder = dir.path().join("out/avatar");
+    let path = |name: &str| folder.join(name).to_str().unwrap().to_owned();
+    let rig = dir.path().join("avatar.glb").to_str().unwrap().to_owned();
+    let map_out = dir.path().join("map.dsa").to_str().unwrap().to_owned();
+    let glb = dir.path().join("mapped.glb");
+    let base = ["--poses", &path("poses.dsa"), "--labels", &path("labels.dsa"), "-o", &map_out];
+    let with = |simplified: &str, rig: &str, glb: &Path| -> std::process::Output {
+        let mut args = base.to_vec();
+        args.extend(["--simplified", simplified, "--rig", rig, "--glb", glb.to_str().unwrap()]);
+        desal_map(&args)
+    };
+
+    let out = with(&path("simplified.dsa"), &rig, &glb);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(std::fs::read(&glb).unwrap() == std::fs::read(folder.join("simplified.glb")).unwrap());
+
+    // Another tool's mesh (here stage 3's raw template as a PLY): every vertex is new, so
+    // the weights are refitted, at most 4 per vertex, on the input's skeleton.
+    let external = dir.path().join("external.glb");
+    let out = with(&path("simplified-template-raw.ply"), &rig, &external);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let written = read(&external);
+    assert!(written.mesh.influences.max_influences() <= 4);
+    assert_eq!(written.skin, read(&sample_rig()).skin);
+
+    // A rig with other bytes than the pose set records.
+    let other = dir.path().join("other.glb");
+    let mut changed = input.clone();
+    *changed.last_mut().unwrap() ^= 1;
+    std::fs::write(&other, &changed).unwrap();
+    let refused = dir.path().join("refused.glb");
+    let out = with(&path("simplified.dsa"), other.to_str().unwrap(), &refused);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("is not the rig") && stderr(&out).contains("avatar.glb"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!refused.exists());
+
+    // --glb without --rig, and a pose set made from pose files.
+    let simplified = path("simplified.dsa");
+    let mut args = base.to_vec();
+    args.extend(["--simplified", &simplified, "--glb", refused.to_str().unwrap()]);
+    let out = desal_map(&args);
+    assert!(!out.status.success() && stderr(&out).contains("--rig"), "{}", stderr(&out));
+    let tube = crate::support::write_tube_dataset(&dir.path().join("tube"), "");
+    crate::support::run_ok(&tube, &[]);
+    let tube_out = tube.parent().unwrap().join("out/tube");
+    let tube_path = |name: &str| tube_out.join(name).to_str().unwrap().to_owned();
+    let out = desal_map(&[
+        "--poses",
+        &tube_path("poses.dsa"),
+        "--labels",
+        &tube_path("labels.dsa"),
+        "--simplified",
+        &tube_path("simplified.dsa"),
+        "-o",
+        &map_out,
+        "--rig",
+        &rig,
+        "--glb",
+        refused.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("not from a skinned glTF rig"), "{}", stderr(&out));
+    assert!(!refused.exists());
 }

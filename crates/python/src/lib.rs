@@ -12,6 +12,7 @@ use desal::memory::{self, StageParams};
 use desal::stages::fit::FitParams;
 use desal::stages::hierarchy::HierarchyParams;
 use desal::stages::parts::PartsParams;
+use desal::stages::rig::RigParams;
 use desal::stages::saliency::SaliencyParams;
 use desal::stages::simplify::{self as simplify_stage, Cost, SimplifyParams};
 use desal_io::artifact::{FitV1, SaliencyV1, SimplifiedV1};
@@ -486,6 +487,70 @@ fn simplify_pose_set<'py>(
     Ok(out)
 }
 
+/// A skinned glTF rig simplified as `desal run` simplifies a `[dataset.rig]`, written to
+/// `out` as a `.glb` (the bytes `desal run` writes as `simplified.glb`); returns the
+/// report. `rig` is the JSON of the `[dataset.rig]` table without `file`.
+#[pyfunction]
+#[pyo3(signature = (file, out, rig=None, method="paper", fit=None, saliency=None, simplify=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn simplify_rig<'py>(
+    py: Python<'py>,
+    file: std::path::PathBuf,
+    out: std::path::PathBuf,
+    rig: Option<&str>,
+    method: &str,
+    fit: Option<&str>,
+    saliency: Option<&str>,
+    simplify: Option<&str>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut table: serde_json::Value = params("rig", rig)?;
+    let Some(object) = table.as_object_mut() else {
+        return Err(InputError::new_err("rig: the settings must be a table"));
+    };
+    if object.contains_key("file") {
+        return Err(bad("rig", "give the rig's path as the first argument, not as `file`"));
+    }
+    object.insert("file".into(), file.display().to_string().into());
+    let rig: RigParams =
+        serde_json::from_value(table).map_err(|e| InputError::new_err(format!("rig: {e}")))?;
+    rig.frame_config().map_err(errors::input)?;
+    rig.parts_config().map_err(errors::input)?;
+    let (params, multipose) = stage_params(method, fit, saliency, simplify)?;
+    let s = detached(py, progress, |p| {
+        let s = memory::simplify_rig(&file, &rig, &params, multipose, p).map_err(|e| {
+            // A rig desal cannot read or pose is the caller's input, not a failure.
+            if e.chain().any(|c| c.is::<desal_rig::RigError>()) {
+                errors::input(e)
+            } else {
+                errors::failed(e)
+            }
+        })?;
+        desal_io::write_atomic(&out, &s.glb).map_err(|e| errors::failed(e.into()))?;
+        Ok(s)
+    })?;
+    let report = PyDict::new(py);
+    report.set_item("method", if multipose { "multipose" } else { method })?;
+    report.set_item("glb", out)?;
+    report.set_item("rig", convert::to_python(py, &s.rig)?)?;
+    report.set_item("ingest", convert::to_python(py, &s.ingest.summary)?)?;
+    report.set_item("ingest_note", &s.ingest.note)?;
+    report.set_item("labels", convert::to_python(py, &s.labels.summary)?)?;
+    report.set_item("fit", convert::to_python(py, &s.stages.fit.summary)?)?;
+    report.set_item("saliency", convert::to_python(py, &s.stages.saliency.summary)?)?;
+    report.set_item(
+        "simplify",
+        simplified_report(
+            py,
+            &s.stages.simplified.body,
+            &json(&s.stages.simplified.summary)?,
+            &s.stages.simplified.note,
+        )?,
+    )?;
+    report.set_item("map", convert::to_python(py, &s.stages.map.summary)?)?;
+    Ok(report)
+}
+
 /// A hierarchy of coarse levels: the npz arrays (`levels`, `F{k}`, `A{k}_*`, `D{k}_*`,
 /// `U{k}_*`, `map{k}`, `orig{k}`) and each level step's summary.
 #[pyfunction]
@@ -627,6 +692,7 @@ fn _desal(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(simplify, m)?,
         wrap_pyfunction!(map, m)?,
         wrap_pyfunction!(simplify_pose_set, m)?,
+        wrap_pyfunction!(simplify_rig, m)?,
         wrap_pyfunction!(hierarchy, m)?,
         wrap_pyfunction!(run, m)?,
         wrap_pyfunction!(load, m)?,

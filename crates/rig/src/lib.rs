@@ -16,6 +16,7 @@
 //! 5. [`simplified_rig`] then [`write_glb`]: the same skeleton, inverse bind matrices and
 //!    animations with the simplified mesh, seams kept, weights exact (subset placement)
 //!    or refitted (optimal placement).
+//! 6. [`viewer::view_html`]: a self-contained three.js page showing both rigs animated.
 //!
 //! Like `desal-sample`, this crate is not a stage: it knows a file format (glTF), the
 //! one exception to "`desal-io` knows every format", because the `gltf` crate is the
@@ -28,6 +29,7 @@ pub mod pose;
 pub mod read;
 pub mod refit;
 pub mod simplified;
+pub mod viewer;
 pub mod weld;
 pub mod write;
 

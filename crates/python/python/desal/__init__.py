@@ -9,7 +9,7 @@ same Rust code, so the same arrays give the same bytes as the command line:
 >>> out.poses.shape, out.vertex_map.shape                      # (P, 2500, 3), (2500,)
 
 Stages one at a time: :func:`fit`, :func:`saliency`, :func:`simplify` (any mesh),
-:func:`map`. Multi-level hierarchies for mesh networks: :func:`hierarchy`,
+:func:`map`. A skinned glTF rig in, a simplified rig out: :func:`simplify_rig`. Multi-level hierarchies for mesh networks: :func:`hierarchy`,
 :func:`load_hierarchy`, :func:`save_graphcmr`. The driver with its cache: :func:`run`.
 Any artifact: :func:`load`.
 
@@ -53,6 +53,7 @@ __all__ = [
     "saliency",
     "simplify",
     "simplify_pose_set",
+    "simplify_rig",
     "tqdm_progress",
 ]
 
@@ -218,6 +219,67 @@ def simplify_pose_set(
         progress,
     )
     return Simplification(**out)
+
+
+def simplify_rig(
+    rig: PathArg,
+    out: PathArg,
+    target_vertices: Optional[int] = None,
+    method: str = "paper",
+    placement: str = "subset",
+    target_faces: Optional[int] = None,
+    ratio: Optional[float] = None,
+    mesh: Optional[str] = None,
+    poses: str = "animations",
+    frames: Optional[int] = None,
+    seed: Optional[int] = None,
+    max_degrees: Optional[float] = None,
+    min_part_vertices: Optional[int] = None,
+    fit_method: str = "rigid",
+    saliency_options: Optional[dict] = None,
+    simplify_options: Optional[dict] = None,
+    progress: Progress = None,
+) -> dict:
+    """Simplifies the skinned glTF 2.0 rig ``rig`` (``.glb``/``.gltf``) and writes the
+    simplified rig to ``out`` (``.glb``), as ``desal run`` does for a ``[dataset.rig]``:
+    the same bytes as its ``simplified.glb`` for the same settings.
+
+    The rig is posed by linear blend skinning at ``frames`` frames of its animations
+    (``poses="animations"``), of seeded random joint turns (``"random"``) or both; its
+    UV/normal seams are welded for simplification and kept in the output. ``mesh``
+    picks the skinned mesh when the file has several. The output has the input's
+    skeleton, inverse bind matrices and animations; with ``placement="subset"`` every
+    kept vertex keeps its exact weights, with ``"optimal"`` at most 4 weights are
+    refitted over the poses. ``method`` is as for :func:`simplify_pose_set`. Returns the
+    report (``rig``: the output's vertex, face and seam counts; ``ingest``, ``labels``,
+    ``fit``, ``saliency``, ``simplify``, ``map``: each stage's). A rig that cannot be
+    read or posed raises :class:`InputError` naming the file and the element.
+    """
+    rig_table = json.loads(
+        _options(
+            mesh=mesh,
+            poses=poses,
+            frames=frames,
+            seed=seed,
+            max_degrees=max_degrees,
+            min_part_vertices=min_part_vertices,
+        )
+    )
+    simplify_table = dict(simplify_options or {})
+    simplify_table.update(
+        {k: v for k, v in dict(target_vertices=target_vertices, target_faces=target_faces, ratio=ratio).items() if v is not None}
+    )
+    simplify_table["placement"] = placement
+    return _desal.simplify_rig(
+        rig,
+        out,
+        json.dumps(rig_table),
+        method,
+        _options(method=fit_method),
+        json.dumps(saliency_options or {}),
+        json.dumps(simplify_table),
+        progress,
+    )
 
 
 class Hierarchy:

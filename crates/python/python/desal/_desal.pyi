@@ -117,6 +117,16 @@ def simplify_pose_set(
     simplify: Optional[str] = None,
     progress: _Progress = None,
 ) -> dict: ...
+def simplify_rig(
+    file: _Path,
+    out: _Path,
+    rig: Optional[str] = None,
+    method: str = "paper",
+    fit: Optional[str] = None,
+    saliency: Optional[str] = None,
+    simplify: Optional[str] = None,
+    progress: _Progress = None,
+) -> dict: ...
 def hierarchy(
     ps: PoseSet,
     hierarchy: str,

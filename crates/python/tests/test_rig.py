@@ -1,0 +1,71 @@
+"""desal.simplify_rig against the CLI's driver, on the bundled CC0 rig (issue 15).
+
+    pip install ./crates/python && pip install pytest
+    python -m pytest crates/python/tests
+"""
+
+import pathlib
+
+import pytest
+
+import desal
+
+ROOT = pathlib.Path(__file__).resolve().parents[3]
+RIG = ROOT / "data-samples" / "rig.glb"
+
+# pipelines/rig-sample.toml's settings, fewer frames to keep the test short.
+SETTINGS = dict(target_vertices=2676, method="paper", placement="subset", mesh="Body", frames=7)
+
+
+@pytest.fixture(scope="module")
+def cli(tmp_path_factory):
+    """`desal run` on a rig pipeline with SETTINGS: its simplified.glb."""
+    folder = tmp_path_factory.mktemp("cli")
+    (folder / "rig.toml").write_text(
+        f"""schema = 1
+out = "out"
+[[dataset]]
+name = "avatar"
+up_axis = "y"
+[dataset.rig]
+file = "{RIG.as_posix()}"
+mesh = "Body"
+frames = 7
+[dataset.simplify]
+target_vertices = 2676
+placement = "subset"
+saliency = true
+balance = true
+"""
+    )
+    desal.run(folder / "rig.toml", out=folder / "out")
+    return (folder / "out" / "avatar" / "simplified.glb").read_bytes()
+
+
+def test_simplify_rig_writes_the_cli_bytes(cli, tmp_path):
+    out = tmp_path / "avatar.glb"
+    report = desal.simplify_rig(RIG, out, **SETTINGS)
+    assert out.read_bytes() == cli
+    assert report["rig"]["simplified_vertices"] == 2676
+    assert report["rig"]["weights"] == "exact (subset placement)"
+    assert report["ingest"]["poses"] == 8, "the bind pose and 7 frames"
+    assert report["glb"] == out
+
+
+def test_optimal_placement_refits_weights(tmp_path):
+    out = tmp_path / "optimal.glb"
+    report = desal.simplify_rig(RIG, out, target_vertices=3000, placement="optimal", method="qslim", frames=5)
+    assert report["rig"]["refitted_vertices"] > 0 and report["rig"]["max_influences"] <= 4
+    assert out.read_bytes()[:4] == b"glTF"
+
+
+def test_bad_rig_input_is_an_input_error_naming_it(tmp_path):
+    not_a_rig = tmp_path / "broken.glb"
+    not_a_rig.write_bytes(b"glTF but not really")
+    with pytest.raises(desal.InputError, match="broken.glb"):
+        desal.simplify_rig(not_a_rig, tmp_path / "out.glb", target_vertices=100)
+    with pytest.raises(desal.InputError, match="NoSuchMesh"):
+        desal.simplify_rig(RIG, tmp_path / "out.glb", target_vertices=100, mesh="NoSuchMesh")
+    with pytest.raises(desal.InputError, match="everything"):
+        desal.simplify_rig(RIG, tmp_path / "out.glb", target_vertices=100, poses="everything")
+    assert not (tmp_path / "out.glb").exists()
