@@ -28,6 +28,11 @@ use crate::cache::canonical_json;
 use crate::stages::DatasetStages;
 use crate::stages::runner::StageRecord;
 
+/// What the output writers write: part of [`outputs_key`], so that a folder written by
+/// an older desal is rewritten, not kept as in place. Bump it whenever a writer here
+/// adds, drops or changes a file. 2: the hierarchy figures and the rig viewer.
+pub const OUTPUTS_VERSION: u32 = 2;
+
 /// `desal eval`'s folder inside a dataset's output folder: kept when `desal run` replaces
 /// the rest (it depends on the pipeline's inputs, not on the run's stage parameters).
 pub const KEPT_SUBFOLDER: &str = "eval";
@@ -292,6 +297,7 @@ pub fn outputs_key(records: &[StageRecord], up_axis: Option<&str>) -> String {
         "stages": keys,
         "up_axis": up_axis,
         "desal": env!("CARGO_PKG_VERSION"),
+        "outputs": OUTPUTS_VERSION,
     }));
     ContentHash::of(text.as_bytes()).to_hex()
 }
