@@ -1,5 +1,6 @@
 //! `desal-map`: stage 4 alone (greedy mapping + apply to every pose), on artifacts or on
-//! another tool's simplified mesh. Same as `desal map`.
+//! another tool's simplified mesh; with `--glb OUT.glb --rig IN.glb`, on a rig run's pose
+//! set, it also writes the simplified rig. Same as `desal map`.
 use clap::Parser;
 
 #[derive(Debug, Parser)]
