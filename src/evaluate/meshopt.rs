@@ -90,7 +90,7 @@ pub fn simplify(
 /// The kept vertices in original index order, and the faces renumbered onto them.
 fn subset_body(template: &TriMesh, result: &[u32]) -> SimplifiedV1 {
     let faces: Vec<[u32; 3]> = result.chunks_exact(3).map(|f| [f[0], f[1], f[2]]).collect();
-    let (kept, faces) = super::methods::used_vertices(template.vertex_count(), &faces);
+    let (kept, faces) = desal_mesh::used_vertices(template.vertex_count(), &faces);
     let mut body = crate::stages::simplify::external(&TriMesh {
         positions: kept.iter().map(|&v| template.positions[v as usize]).collect(),
         faces,

@@ -321,25 +321,8 @@ fn check_parts(name: &str, mapped: &MapOutput) -> Result<()> {
 /// (another tool's file may carry either; the model needs neither), keeping order.
 fn compact(mesh: &TriMesh) -> TriMesh {
     let (faces, _) = desal_mesh::clean_faces(&mesh.faces);
-    let (kept, faces) = used_vertices(mesh.vertex_count(), &faces);
+    let (kept, faces) = desal_mesh::used_vertices(mesh.vertex_count(), &faces);
     TriMesh { positions: kept.iter().map(|&v| mesh.positions[v as usize]).collect(), faces }
-}
-
-/// The vertices (of `vertex_count`) that `faces` use, in index order, and `faces`
-/// renumbered onto them.
-pub(super) fn used_vertices(vertex_count: usize, faces: &[[u32; 3]]) -> (Vec<u32>, Vec<[u32; 3]>) {
-    let mut new_index = vec![u32::MAX; vertex_count];
-    for &v in faces.iter().flatten() {
-        new_index[v as usize] = 0;
-    }
-    let mut kept = Vec::new();
-    for (v, slot) in new_index.iter_mut().enumerate() {
-        if *slot == 0 {
-            *slot = kept.len() as u32;
-            kept.push(v as u32);
-        }
-    }
-    (kept, faces.iter().map(|f| f.map(|v| new_index[v as usize])).collect())
 }
 
 #[cfg(test)]

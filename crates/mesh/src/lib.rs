@@ -25,4 +25,4 @@ pub use math::{Mat3, Real, Vec3};
 pub use mesh::{Face, TriMesh, edge_length_stats};
 pub use pose_set::PoseSet;
 pub use progress::{NoProgress, Progress};
-pub use validate::{FaceCleanup, clean_faces};
+pub use validate::{FaceCleanup, clean_faces, used_vertices};

@@ -57,6 +57,23 @@ impl FaceCleanup {
     }
 }
 
+/// The vertices (of `vertex_count`) that `faces` use, in index order, and `faces`
+/// renumbered onto them.
+pub fn used_vertices(vertex_count: usize, faces: &[Face]) -> (Vec<u32>, Vec<Face>) {
+    let mut new_index = vec![u32::MAX; vertex_count];
+    for &v in faces.iter().flatten() {
+        new_index[v as usize] = 0;
+    }
+    let mut kept = Vec::new();
+    for (v, slot) in new_index.iter_mut().enumerate() {
+        if *slot == 0 {
+            *slot = kept.len() as u32;
+            kept.push(v as u32);
+        }
+    }
+    (kept, faces.iter().map(|f| f.map(|v| new_index[v as usize])).collect())
+}
+
 /// Removes faces with a repeated vertex and faces that repeat an earlier face's vertex
 /// set, keeping the order of the rest. Returns the kept faces and what was removed.
 pub fn clean_faces(faces: &[Face]) -> (Vec<Face>, FaceCleanup) {

@@ -66,6 +66,22 @@ def _options(**values: Any) -> str:
     return json.dumps({k: v for k, v in values.items() if v is not None})
 
 
+def _simplify_table(
+    options: Optional[dict],
+    placement: str,
+    target_vertices: Optional[int],
+    target_faces: Optional[int],
+    ratio: Optional[float],
+) -> str:
+    """A pipeline file's ``[dataset.simplify]`` table as JSON: ``options`` with the
+    placement and whichever target is given."""
+    table = dict(options or {})
+    targets = dict(target_vertices=target_vertices, target_faces=target_faces, ratio=ratio)
+    table.update({k: v for k, v in targets.items() if v is not None})
+    table["placement"] = placement
+    return json.dumps(table)
+
+
 def _pose_set(poses: Any, faces: Any, labels: Any, template: int, progress: Progress) -> PoseSet:
     if isinstance(poses, PoseSet):
         if faces is not None or labels is not None:
@@ -205,17 +221,13 @@ def simplify_pose_set(
     ``[dataset.simplify]`` tables.
     """
     ps = _pose_set(poses, faces, labels, template, progress)
-    simplify_table = dict(simplify_options or {})
-    simplify_table.update(
-        {k: v for k, v in dict(target_vertices=target_vertices, target_faces=target_faces, ratio=ratio).items() if v is not None}
-    )
-    simplify_table["placement"] = placement
+    simplify_table = _simplify_table(simplify_options, placement, target_vertices, target_faces, ratio)
     out = _desal.simplify_pose_set(
         ps,
         method,
         _options(method=fit_method),
         json.dumps(saliency_options or {}),
-        json.dumps(simplify_table),
+        simplify_table,
         progress,
     )
     return Simplification(**out)
@@ -255,29 +267,18 @@ def simplify_rig(
     ``fit``, ``saliency``, ``simplify``, ``map``: each stage's). A rig that cannot be
     read or posed raises :class:`InputError` naming the file and the element.
     """
-    rig_table = json.loads(
-        _options(
-            mesh=mesh,
-            poses=poses,
-            frames=frames,
-            seed=seed,
-            max_degrees=max_degrees,
-            min_part_vertices=min_part_vertices,
-        )
+    rig_table = _options(
+        mesh=mesh, poses=poses, frames=frames, seed=seed, max_degrees=max_degrees, min_part_vertices=min_part_vertices
     )
-    simplify_table = dict(simplify_options or {})
-    simplify_table.update(
-        {k: v for k, v in dict(target_vertices=target_vertices, target_faces=target_faces, ratio=ratio).items() if v is not None}
-    )
-    simplify_table["placement"] = placement
+    simplify_table = _simplify_table(simplify_options, placement, target_vertices, target_faces, ratio)
     return _desal.simplify_rig(
         rig,
         out,
-        json.dumps(rig_table),
+        rig_table,
         method,
         _options(method=fit_method),
         json.dumps(saliency_options or {}),
-        json.dumps(simplify_table),
+        simplify_table,
         progress,
     )
 
@@ -348,9 +349,8 @@ def hierarchy(
     options = _options(
         levels=list(levels), upsampler=upsampler, neighbours=neighbours, ridge=ridge, neighbourhood=neighbourhood
     )
-    simplify_table = dict(simplify_options or {})
-    simplify_table["placement"] = placement
-    arrays, report = _desal.hierarchy(ps, options, method, None, None, json.dumps(simplify_table), progress)
+    simplify_table = _simplify_table(simplify_options, placement, None, None, None)
+    arrays, report = _desal.hierarchy(ps, options, method, None, None, simplify_table, progress)
     return Hierarchy(arrays, report)
 
 
