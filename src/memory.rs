@@ -173,6 +173,7 @@ pub fn simplify_rig(
     multipose: bool,
     progress: &dyn Progress,
 ) -> Result<RigSimplification> {
+    rig.weight_options()?;
     let input = RigInput { file, params: rig };
     let ingest = input.compute_poses()?;
     let set = ingest.body.to_pose_set().with_context(|| format!("{}", file.display()))?;

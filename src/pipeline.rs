@@ -260,6 +260,7 @@ fn check_parameters(spec: &DatasetToml, pose_files: &[PathBuf]) -> Result<()> {
     }
     if let Some(rig) = &spec.rig {
         rig.frame_config()?;
+        rig.weight_options()?;
         rig.parts_config()?;
     }
     if let Some(h) = &spec.hierarchy {

@@ -71,6 +71,13 @@ pub struct RigParams {
     /// Fewest vertices a joint's part may have before it joins its parent. Default 50.
     #[serde(default = "default_min_part_vertices")]
     pub min_part_vertices: usize,
+    /// At most this many joint influences per vertex of `simplified.glb` (e.g. 4 for an
+    /// engine that skins `JOINTS_0` only): subset placement keeps each vertex's largest
+    /// weights, renormalised; the refit fits at most this many. Unset: subset placement
+    /// keeps the exact weights, the refit at most 4. Left out of the ingest key's
+    /// parameters when unset, so that caches made before it existed still match.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_influences: Option<usize>,
 }
 
 fn default_frames() -> usize {
@@ -98,6 +105,14 @@ impl RigParams {
             PosesFrom::Both => PoseSource::Both,
         };
         Ok(FrameConfig { source, frames: self.frames, seed: self.seed, max_degrees: self.max_degrees })
+    }
+
+    /// The weight settings of the simplified rig, validated.
+    pub fn weight_options(&self) -> Result<desal_rig::WeightOptions> {
+        if self.max_influences == Some(0) {
+            bail!("rig.max_influences must be at least 1 (a vertex needs a joint to follow)");
+        }
+        Ok(desal_rig::WeightOptions { max_influences: self.max_influences })
     }
 
     pub fn parts_config(&self) -> Result<desal_rig::PartsConfig> {
@@ -285,13 +300,18 @@ pub fn simplified_glb(
     map: &MapV1,
 ) -> Result<(Vec<u8>, SimplifiedRigSummary)> {
     let input = RigInput { file: &source.file, params: &source.params };
+    let options = source.params.weight_options()?;
     let (rig, posed) = input.load()?;
-    let (out, report) = simplified_rig(&rig, &posed, simplified, map)?;
+    let (out, report) = simplified_rig(&rig, &posed, simplified, map, &options)?;
     let bytes = desal_rig::write_glb(&out)?;
     let subset = simplified.simp_to_orig.iter().all(Option::is_some);
     let summary = SimplifiedRigSummary {
         placement: simplified.placement.clone(),
-        weights: if subset { "exact (subset placement)" } else { "least-squares refit over the pose set" },
+        weights: match (subset, options.max_influences) {
+            (true, None) => "exact (subset placement)",
+            (true, Some(_)) => "exact, capped at max_influences and renormalised (subset placement)",
+            (false, _) => "least-squares refit over the pose set",
+        },
         simplified_vertices: report.simplified_vertices,
         output_vertices: report.output_vertices,
         output_faces: report.output_faces,
@@ -309,6 +329,7 @@ pub fn simplified_rig(
     posed: &PosedRig,
     simplified: &SimplifiedV1,
     map: &MapV1,
+    options: &desal_rig::WeightOptions,
 ) -> Result<(Rig, desal_rig::SimplifiedReport)> {
     let positions: Vec<desal_mesh::Vec3> = simplified.positions.iter().map(|&p| p.into()).collect();
     let subset = simplified.simp_to_orig.iter().all(Option::is_some);
@@ -319,7 +340,7 @@ pub fn simplified_rig(
         subset,
     };
     let targets = desal_rig::PoseTargets { joints: &posed.joints, positions: &posed.poses.poses };
-    Ok(desal_rig::simplified_rig(rig, &posed.weld, &input, &targets)?)
+    Ok(desal_rig::simplified_rig_with(rig, &posed.weld, &input, &targets, options)?)
 }
 
 #[cfg(test)]
@@ -347,6 +368,7 @@ mod tests {
             RigParams { frames: 61, ..base.clone() },
             RigParams { seed: 1, ..base.clone() },
             RigParams { max_degrees: 31.0, ..base.clone() },
+            RigParams { max_influences: Some(4), ..base.clone() },
         ];
         for v in &variants {
             assert_ne!(key(&a, v), reference, "{v:?}");
@@ -368,6 +390,8 @@ mod tests {
         assert!(RigParams { frames: 0, ..p.clone() }.frame_config().is_err());
         assert!(RigParams { max_degrees: 200.0, ..p.clone() }.frame_config().is_err());
         assert!(RigParams { min_part_vertices: 2, ..p.clone() }.parts_config().is_err());
+        assert!(RigParams { max_influences: Some(0), ..p.clone() }.weight_options().is_err());
+        assert_eq!(p.weight_options().unwrap().max_influences, None);
         let both: RigParams = toml::from_str("file = \"a.glb\"\nposes = \"both\"").unwrap();
         assert_eq!(both.poses, PosesFrom::Both);
         assert!(toml::from_str::<RigParams>("file = \"a.glb\"\nposes = \"all\"").is_err());

@@ -43,7 +43,10 @@ pub use model::{
 pub use parts::{PartsConfig, dominant_joint_parts};
 pub use pose::{Frame, FrameConfig, PoseSource, joint_matrices, sample_frames, skin_points};
 pub use read::{ReadOptions, read_rig, read_rig_from};
-pub use simplified::{PoseTargets, SimplifiedInput, SimplifiedReport, simplified_rig};
+pub use simplified::{
+    PoseTargets, SimplifiedInput, SimplifiedReport, WeightOptions, simplified_influences, simplified_rig,
+    simplified_rig_with,
+};
 pub use weld::Weld;
 pub use write::write_glb;
 

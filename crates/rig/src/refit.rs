@@ -17,7 +17,8 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::pose::transform_point;
 
-/// Most influences a refitted vertex keeps (glTF's one `JOINTS_0`/`WEIGHTS_0` set).
+/// Most influences a refitted vertex keeps by default (glTF's one `JOINTS_0`/`WEIGHTS_0`
+/// set, what every engine skins).
 pub const MAX_INFLUENCES: usize = 4;
 
 /// Weight of the `Σ w = 1` row relative to the data rows (scaled by their magnitude).
@@ -25,15 +26,16 @@ const SUM_ROW_WEIGHT: f64 = 1e3;
 
 /// Fits weights over `candidates` (skin joint indices). `joints[k][j]` is joint `j`'s
 /// skinning matrix in pose `k`, `targets[k]` the target position in pose `k`. Returns
-/// `(joint, weight)` pairs, weights positive and summing to 1 (at most
-/// [`MAX_INFLUENCES`]), and the fit's sum of squared residuals; `None` when no candidate
-/// is given.
+/// `(joint, weight)` pairs, weights positive and summing to 1 (at most `max_influences`,
+/// at least 1), and the fit's sum of squared residuals; `None` when no candidate is given.
 pub fn fit_weights(
     x: &Vec3,
     candidates: &[usize],
     joints: &[Vec<Mat4>],
     targets: &[Vec3],
+    max_influences: usize,
 ) -> Option<(Vec<(usize, f64)>, f64)> {
+    let max_influences = max_influences.max(1);
     if candidates.is_empty() {
         return None;
     }
@@ -68,10 +70,10 @@ pub fn fit_weights(
     };
     let mut chosen: Vec<usize> = candidates.to_vec();
     let mut w = solve(&chosen);
-    if w.iter().filter(|&&x| x > 0.0).count() > MAX_INFLUENCES {
+    if w.iter().filter(|&&x| x > 0.0).count() > max_influences {
         let mut order: Vec<usize> = (0..chosen.len()).collect();
         order.sort_by(|&a, &b| w[b].total_cmp(&w[a]).then(a.cmp(&b)));
-        order.truncate(MAX_INFLUENCES);
+        order.truncate(max_influences);
         order.sort_unstable();
         chosen = order.iter().map(|&i| chosen[i]).collect();
         w = solve(&chosen);
@@ -176,7 +178,7 @@ mod tests {
             .iter()
             .map(|p| 0.3 * transform_point(&p[0], &x) + 0.7 * transform_point(&p[2], &x))
             .collect();
-        let (weights, residual) = fit_weights(&x, &[0, 1, 2], &poses, &targets).unwrap();
+        let (weights, residual) = fit_weights(&x, &[0, 1, 2], &poses, &targets, MAX_INFLUENCES).unwrap();
         assert_eq!(weights.len(), 2, "{weights:?}");
         assert_eq!(weights[0].0, 0);
         assert!((weights[0].1 - 0.3).abs() < 1e-9, "{weights:?}");
@@ -204,10 +206,12 @@ mod tests {
         // Targets far from any blend: force the constraints to bind.
         let targets: Vec<Vec3> = (0..9).map(|k| Vec3::new(-(k as f64), 2.0, 0.3)).collect();
         let candidates: Vec<usize> = (0..joints).collect();
-        let (weights, _) = fit_weights(&x, &candidates, &poses, &targets).unwrap();
-        assert!(!weights.is_empty() && weights.len() <= MAX_INFLUENCES, "{weights:?}");
-        assert!(weights.iter().all(|&(_, w)| w > 0.0));
-        let total: f64 = weights.iter().map(|w| w.1).sum();
-        assert!((total - 1.0).abs() < 1e-12);
+        for limit in [MAX_INFLUENCES, 2, 1] {
+            let (weights, _) = fit_weights(&x, &candidates, &poses, &targets, limit).unwrap();
+            assert!(!weights.is_empty() && weights.len() <= limit, "{limit}: {weights:?}");
+            assert!(weights.iter().all(|&(_, w)| w > 0.0));
+            let total: f64 = weights.iter().map(|w| w.1).sum();
+            assert!((total - 1.0).abs() < 1e-12);
+        }
     }
 }

@@ -64,12 +64,34 @@ pub struct SimplifiedReport {
     pub cross_chart_faces: usize,
 }
 
-/// Builds the simplified rig. `weld` is the weld of `rig.mesh` the pipeline ran on.
+/// How many influences each simplified vertex keeps.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct WeightOptions {
+    /// At most this many influences per vertex (at least 1): subset placement keeps a
+    /// vertex's largest weights, renormalised, and the refit fits at most this many.
+    /// `None`: subset placement keeps the exact weights, however many (the sample has up
+    /// to 7), and the refit keeps at most [`MAX_INFLUENCES`].
+    pub max_influences: Option<usize>,
+}
+
+/// Builds the simplified rig with the default [`WeightOptions`]. `weld` is the weld of
+/// `rig.mesh` the pipeline ran on.
 pub fn simplified_rig(
     rig: &Rig,
     weld: &Weld,
     simplified: &SimplifiedInput,
     targets: &PoseTargets,
+) -> Result<(Rig, SimplifiedReport), RigError> {
+    simplified_rig_with(rig, weld, simplified, targets, &WeightOptions::default())
+}
+
+/// Builds the simplified rig, its weights as `options` say.
+pub fn simplified_rig_with(
+    rig: &Rig,
+    weld: &Weld,
+    simplified: &SimplifiedInput,
+    targets: &PoseTargets,
+    options: &WeightOptions,
 ) -> Result<(Rig, SimplifiedReport), RigError> {
     check_input(weld, simplified)?;
     let mesh = &rig.mesh;
@@ -98,19 +120,7 @@ pub fn simplified_rig(
     }
 
     // 3. Influences per simplified vertex (the same for all its copies).
-    let simp_count = simplified.positions.len();
-    let mut simp_weights: Vec<Option<Vec<(u16, f32)>>> = vec![None; simp_count];
-    let mut refitted = 0;
-    if !simplified.subset {
-        let neighbours = welded_neighbours(weld);
-        for (s, slot) in simp_weights.iter_mut().enumerate() {
-            let welded = simplified.simp_to_welded[s] as usize;
-            let (weights, was_refitted) =
-                refit_vertex(mesh, weld, &neighbours, welded, &simplified.positions[s], targets);
-            refitted += usize::from(was_refitted);
-            *slot = Some(weights);
-        }
-    }
+    let (simp_weights, refitted) = simplified_influences(mesh, weld, simplified, targets, options);
 
     // 2. Attributes from the copy; positions and influences by placement.
     let mut influences = Influences::new();
@@ -121,12 +131,12 @@ pub fn simplified_rig(
         let copy = copy as usize;
         if simplified.subset {
             positions.push(mesh.positions[copy]);
-            influences.push_row(mesh.influences.of(copy).map(|(j, w)| (j as u16, w)));
         } else {
             let p = simplified.positions[s as usize];
             positions.push([p.x as f32, p.y as f32, p.z as f32]);
-            influences.push_row(simp_weights[s as usize].clone().expect("fitted above"));
         }
+        // A welded vertex's copies have bit-identical weights (crate::weld).
+        influences.push_row(simp_weights[s as usize].iter().copied());
         if let (Some(out), Some(input)) = (&mut normals, &mesh.normals) {
             out.push(input[copy]);
         }
@@ -134,6 +144,7 @@ pub fn simplified_rig(
             out.push(input[copy]);
         }
     }
+    let simp_count = simplified.positions.len();
     let mut used = vec![0u32; simp_count];
     for &(s, _) in &out_vertices {
         used[s as usize] += 1;
@@ -151,6 +162,47 @@ pub fn simplified_rig(
     let mut out = rig.clone();
     out.mesh = out_mesh;
     Ok((out, report))
+}
+
+/// The joints and weights of every simplified vertex (`simp` space), and how many were
+/// refitted. Subset placement: the mapped welded vertex's exact weights (its largest
+/// `max_influences`, renormalised, when capped). Optimal placement: the least-squares
+/// refit over `targets` ([`refit_vertex`]). `desal eval` calls this with the training
+/// poses of each fold, so a held-out pose never reaches the weights it is skinned with.
+pub fn simplified_influences(
+    mesh: &SkinnedMesh,
+    weld: &Weld,
+    simplified: &SimplifiedInput,
+    targets: &PoseTargets,
+    options: &WeightOptions,
+) -> (Vec<Vec<(u16, f32)>>, usize) {
+    if simplified.subset {
+        let weights = simplified
+            .simp_to_welded
+            .iter()
+            .map(|&welded| {
+                let representative = weld.copies_of(welded as usize)[0] as usize;
+                let exact = mesh.influences.of(representative);
+                match options.max_influences {
+                    Some(limit) if mesh.influences.of(representative).count() > limit => to_f32_weights(
+                        &largest_normalised(exact.map(|(j, w)| (j, f64::from(w))).collect(), limit),
+                    ),
+                    _ => exact.map(|(j, w)| (j as u16, w)).collect(),
+                }
+            })
+            .collect();
+        return (weights, 0);
+    }
+    let limit = options.max_influences.unwrap_or(MAX_INFLUENCES).max(1);
+    let neighbours = welded_neighbours(weld);
+    let fitted: Vec<(Vec<(u16, f32)>, bool)> = (0..simplified.positions.len())
+        .map(|s| {
+            let welded = simplified.simp_to_welded[s] as usize;
+            refit_vertex(mesh, weld, &neighbours, welded, &simplified.positions[s], targets, limit)
+        })
+        .collect();
+    let refitted = fitted.iter().filter(|f| f.1).count();
+    (fitted.into_iter().map(|f| f.0).collect(), refitted)
 }
 
 fn check_input(weld: &Weld, s: &SimplifiedInput) -> Result<(), RigError> {
@@ -246,7 +298,7 @@ fn welded_neighbours(weld: &Weld) -> Vec<Vec<u32>> {
 }
 
 /// Weights for a vertex at `x` mapped to `welded`: the refit over the joints of `welded`
-/// and its ring, or `welded`'s own four largest weights when they fit better. Returns
+/// and its ring, or `welded`'s own `limit` largest weights when they fit better. Returns
 /// the weights and whether they are the refit.
 fn refit_vertex(
     mesh: &SkinnedMesh,
@@ -255,6 +307,7 @@ fn refit_vertex(
     welded: usize,
     x: &Vec3,
     targets: &PoseTargets,
+    limit: usize,
 ) -> (Vec<(u16, f32)>, bool) {
     let representative = weld.copies_of(welded)[0] as usize;
     let mut candidates: Vec<usize> = mesh.influences.of(representative).map(|(j, _)| j).collect();
@@ -264,20 +317,22 @@ fn refit_vertex(
     candidates.sort_unstable();
     candidates.dedup();
     let y: Vec<Vec3> = targets.positions.iter().map(|p| p[welded]).collect();
-    let own =
-        largest_normalised(mesh.influences.of(representative).map(|(j, w)| (j, f64::from(w))).collect());
+    let own = largest_normalised(
+        mesh.influences.of(representative).map(|(j, w)| (j, f64::from(w))).collect(),
+        limit,
+    );
     let own_residual = residual(x, &own, targets.joints, &y);
-    let (weights, refitted) = match fit_weights(x, &candidates, targets.joints, &y) {
+    let (weights, refitted) = match fit_weights(x, &candidates, targets.joints, &y, limit) {
         Some((fit, r)) if r < own_residual => (fit, true),
         _ => (own, false),
     };
     (to_f32_weights(&weights), refitted)
 }
 
-/// The `MAX_INFLUENCES` largest weights, renormalised.
-fn largest_normalised(mut weights: Vec<(usize, f64)>) -> Vec<(usize, f64)> {
+/// The `limit` largest weights, renormalised.
+fn largest_normalised(mut weights: Vec<(usize, f64)>, limit: usize) -> Vec<(usize, f64)> {
     weights.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
-    weights.truncate(MAX_INFLUENCES);
+    weights.truncate(limit);
     weights.sort_by_key(|w| w.0);
     let total: f64 = weights.iter().map(|w| w.1).sum();
     weights.iter().map(|&(j, w)| (j, w / total)).collect()

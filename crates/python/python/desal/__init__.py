@@ -247,6 +247,7 @@ def simplify_rig(
     seed: Optional[int] = None,
     max_degrees: Optional[float] = None,
     min_part_vertices: Optional[int] = None,
+    max_influences: Optional[int] = None,
     fit_method: str = "rigid",
     saliency_options: Optional[dict] = None,
     simplify_options: Optional[dict] = None,
@@ -262,13 +263,20 @@ def simplify_rig(
     picks the skinned mesh when the file has several. The output has the input's
     skeleton, inverse bind matrices and animations; with ``placement="subset"`` every
     kept vertex keeps its exact weights, with ``"optimal"`` at most 4 weights are
-    refitted over the poses. ``method`` is as for :func:`simplify_pose_set`. Returns the
+    refitted over the poses; ``max_influences`` caps both (e.g. 4 for an engine that skins
+    ``JOINTS_0`` only: a subset vertex keeps its largest weights, renormalised). ``method`` is as for :func:`simplify_pose_set`. Returns the
     report (``rig``: the output's vertex, face and seam counts; ``ingest``, ``labels``,
     ``fit``, ``saliency``, ``simplify``, ``map``: each stage's). A rig that cannot be
     read or posed raises :class:`InputError` naming the file and the element.
     """
     rig_table = _options(
-        mesh=mesh, poses=poses, frames=frames, seed=seed, max_degrees=max_degrees, min_part_vertices=min_part_vertices
+        mesh=mesh,
+        poses=poses,
+        frames=frames,
+        seed=seed,
+        max_degrees=max_degrees,
+        min_part_vertices=min_part_vertices,
+        max_influences=max_influences,
     )
     simplify_table = _simplify_table(simplify_options, placement, target_vertices, target_faces, ratio)
     return _desal.simplify_rig(
