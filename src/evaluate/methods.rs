@@ -9,6 +9,7 @@
 //! | `multipose` | Mohr & Gleicher 2003: quadrics summed over all poses, no saliency | subset |
 //! | `meshopt`, `meshopt-regularize`, `meshopt-priority` | meshoptimizer in-process (feature `meshopt`, on by default): plain, `Regularize`, the most salient vertices flagged `Priority` (`meshopt.rs`) | subset |
 //! | `meshlab`, `meshlab-saliency` | MeshLab's quadric edge collapse through pymeshlab (`$DESAL_PYTHON` or `python3`): plain, and stage 2's weights as vertex quality (`qualityweight`; `meshlab.rs`); named explicitly, not in `all` | greedy |
+//! | `gltfpack`, `gltfpack-sa` | rig datasets: gltfpack (`$DESAL_GLTFPACK` or `gltfpack`) on the rig file, `-si R -noq` (and `-sa`), its ratio bisected to the vertex target; its own skin is kept (`gltfpack.rs`); named explicitly, not in `all` | greedy (exact: it keeps input vertices) |
 //! | `external:NAME=PATH` | a simplified template made by another tool | greedy |
 //!
 //! `optimal` placement moves vertices, so they are mapped back by the paper's greedy
@@ -23,6 +24,7 @@ use desal_map::MapOutput;
 use desal_mesh::{NoProgress, PartLabels, PoseSet, TriMesh};
 use desal_simplify::{Placement, SimplifyConfig, StopReason, Target};
 
+use super::rig::{OwnSkin, RigModel};
 pub use crate::stages::simplify::Cost;
 use crate::stages::{map, simplify};
 
@@ -38,13 +40,15 @@ pub enum Method {
     Meshopt(super::meshopt::Variant),
     /// MeshLab through pymeshlab, in a Python subprocess.
     Meshlab(super::meshlab::Variant),
+    /// gltfpack on a rig dataset's file, in a subprocess.
+    Gltfpack(super::gltfpack::Variant),
     /// Another tool's simplified template, read from `path`.
     External { name: String, path: PathBuf },
 }
 
 /// Built-in methods that `all` leaves out, because they need more than this binary
-/// (MeshLab needs Python with pymeshlab).
-pub const OPTIONAL: &[&str] = &["meshlab", "meshlab-saliency"];
+/// (MeshLab needs Python with pymeshlab, gltfpack needs gltfpack and a rig dataset).
+pub const OPTIONAL: &[&str] = &["meshlab", "meshlab-saliency", "gltfpack", "gltfpack-sa"];
 
 /// The methods run when none are named, in table order.
 pub const ALL: &[&str] = &[
@@ -75,6 +79,7 @@ impl Method {
             #[cfg(feature = "meshopt")]
             Method::Meshopt(variant) => variant.name().into(),
             Method::Meshlab(variant) => variant.name().into(),
+            Method::Gltfpack(variant) => variant.name().into(),
             Method::External { name, .. } => name.clone(),
         }
     }
@@ -99,6 +104,9 @@ impl Method {
         }
         if let Some(variant) = super::meshlab::Variant::ALL.into_iter().find(|v| v.name() == text) {
             return Ok(Method::Meshlab(variant));
+        }
+        if let Some(variant) = super::gltfpack::Variant::ALL.into_iter().find(|v| v.name() == text) {
+            return Ok(Method::Gltfpack(variant));
         }
         #[cfg(feature = "meshopt")]
         if let Some(variant) = super::meshopt::Variant::ALL.into_iter().find(|v| v.name() == text) {
@@ -143,6 +151,7 @@ impl Method {
             #[cfg(feature = "meshopt")]
             Method::Meshopt(_) => "subset",
             Method::Meshlab(_) => "optimal",
+            Method::Gltfpack(_) => "subset",
             Method::External { .. } => "external",
         }
     }
@@ -171,6 +180,8 @@ pub struct Inputs {
     /// The pipeline's stage-3 configuration; each method overrides the target, the
     /// placement and the cost switches.
     pub base_config: SimplifyConfig,
+    /// A rig dataset's rig, posed at the pose set's frames.
+    pub rig: Option<RigModel>,
 }
 
 /// A method's registered simplified pose set.
@@ -185,6 +196,8 @@ pub struct SimplifiedSet {
     /// One line about the simplification (stage 3's report, or the external file).
     pub note: String,
     pub simplify_seconds: f64,
+    /// The skin of a method that brings its own (gltfpack), for the rig model.
+    pub skin: Option<OwnSkin>,
 }
 
 /// Simplifies the template with `method` to `target`, maps it to original vertices and
@@ -198,6 +211,7 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
     let name = method.name();
     let started = Instant::now();
     let template = inputs.poses.template_mesh();
+    let mut skin = None;
     let (body, stop, note) = match method {
         Method::Quadric { cost, placement } => {
             let (saliency, balance) = cost.switches();
@@ -280,6 +294,18 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
             };
             (simplify::external(&mesh), Some(stop), note)
         }
+        Method::Gltfpack(variant) => {
+            let Target::Vertices(n) = target else {
+                bail!("{name}: gltfpack is compared at a vertex count; give --target-vertices");
+            };
+            let Some(rig) = &inputs.rig else {
+                bail!("{name}: gltfpack simplifies a glTF rig, so it runs on [dataset.rig] datasets only");
+            };
+            let out = super::gltfpack::simplify(rig, *variant, n).with_context(|| name.clone())?;
+            let stop = if out.reached { StopReason::TargetReached } else { StopReason::NoValidCollapse };
+            skin = Some(out.skin);
+            (simplify::external(&out.mesh), Some(stop), out.note)
+        }
         Method::External { path, .. } => {
             let mesh =
                 desal_io::read_mesh(path).with_context(|| format!("{name}: reading {}", path.display()))?;
@@ -294,7 +320,7 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
     let mapped = map::map(&body, &inputs.poses, &inputs.labels)
         .with_context(|| format!("{name}: stage 4 (mapping to original vertices)"))?;
     check_parts(&name, &mapped)?;
-    Ok(SimplifiedSet { raw, mapped, stop, note, simplify_seconds })
+    Ok(SimplifiedSet { raw, mapped, stop, note, simplify_seconds, skin })
 }
 
 /// The per-part rigid fit the model starts from needs every part to keep at least three

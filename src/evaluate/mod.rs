@@ -19,13 +19,16 @@
 //! the `eval/` folder over (`outputs::KEPT_SUBFOLDER`).
 
 pub mod figures;
+pub mod gltfpack;
 pub mod measure;
 pub mod meshlab;
 #[cfg(feature = "meshopt")]
 pub mod meshopt;
 pub mod methods;
+pub mod model;
 pub mod regions;
 pub mod report;
+pub mod rig;
 pub mod sweep;
 pub mod upsampling;
 
@@ -55,17 +58,23 @@ pub struct EvalArgs {
     /// Methods, comma-separated: qslim-optimal, saliency-optimal, paper-optimal,
     /// qslim-subset, saliency-subset, paper-subset, multipose, meshopt,
     /// meshopt-regularize, meshopt-priority; meshlab and meshlab-saliency (Python with
-    /// pymeshlab: $DESAL_PYTHON or python3); a bare qslim, saliency or paper means both
+    /// pymeshlab: $DESAL_PYTHON or python3); gltfpack and gltfpack-sa (rig datasets;
+    /// $DESAL_GLTFPACK or gltfpack); a bare qslim, saliency or paper means both
     /// placements; external:NAME=PATH is another tool's simplified template; all = every
-    /// built-in method but MeshLab's.
+    /// built-in method but MeshLab's and gltfpack's.
     #[arg(long, value_delimiter = ',', default_value = "all")]
     pub methods: Vec<String>,
     /// The deformation model: scape (part-anchored, the default: the lowest held-out
     /// error at full resolution), scape-cv (its ridge and features cross-validated in
     /// each training fold), scape-centroid (the paper's placement), lbs (linear blend
-    /// skinning with the parts as bones).
-    #[arg(long, default_value = measure::DEFAULT_MODEL)]
-    pub model: String,
+    /// skinning with the parts as bones), rig (a rig dataset's own skinning with each
+    /// simplified rig's weights; the default for [dataset.rig] datasets).
+    #[arg(long)]
+    pub model: Option<String>,
+    /// The row every relative change and sign test is taken against (default:
+    /// qslim-optimal; gltfpack for a rig dataset that runs it).
+    #[arg(long)]
+    pub baseline: Option<String>,
     /// Skip the model's own floor (the model fitted and measured at full resolution).
     #[arg(long)]
     pub no_floor: bool,
@@ -105,7 +114,12 @@ pub struct EvalArgs {
 /// dataset's results went.
 pub fn eval(args: &EvalArgs) -> Result<()> {
     let methods = Method::parse_list(&args.methods)?;
-    let model = measure::pose_model(&args.model)?;
+    model::check(args.model.as_deref())?;
+    if let Some(b) = &args.baseline
+        && !methods.iter().any(|m| m.name() == *b)
+    {
+        bail!("--baseline {b} is not one of the --methods");
+    }
     if args.folds < 2 {
         bail!("--folds {} is too few: held-out evaluation needs at least 2 folds", args.folds);
     }
@@ -128,7 +142,7 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
     let runs = crate::run::run_with_stages(&pipeline, &options).context("running the pipeline's stages")?;
     for DatasetRun { dataset, stages, .. } in &runs {
         let dataset = &pipeline.datasets[*dataset];
-        let dir = evaluate_dataset(&pipeline, dataset, stages, &methods, &model, args)
+        let dir = evaluate_dataset(&pipeline, dataset, stages, &methods, args)
             .with_context(|| format!("evaluating dataset '{}'", dataset.spec.name))?;
         println!("{}: {}", dataset.spec.name, dir.join("eval.md").display());
     }
@@ -150,10 +164,10 @@ fn evaluate_dataset(
     dataset: &Dataset,
     stages: &DatasetStages,
     methods: &[Method],
-    model: &desal_eval::PoseModel,
     args: &EvalArgs,
 ) -> Result<PathBuf> {
     let started = Instant::now();
+    let (model_name, model) = model::resolve(args.model.as_deref(), stages.rig.is_some())?;
     let name = dataset.spec.name.as_str();
     let log = |message: &str| {
         if !args.quiet {
@@ -181,7 +195,8 @@ fn evaluate_dataset(
     for method in methods {
         let set = methods::simplify_and_map(method, &inputs, target)?;
         log(&format!("{}: {}", method.name(), set.note));
-        let deformed = measure::deform(&set.mapped.poses, &set.mapped.labels, &folds, model)
+        let deformed = model
+            .deform(&inputs, &set, &folds)
             .with_context(|| format!("{}: deformation model", method.name()))?;
         let fit: f64 = deformed.models.iter().map(|m| m.fit_seconds + m.synthesis_seconds).sum();
         log(&format!(
@@ -200,10 +215,13 @@ fn evaluate_dataset(
         prepared.push((method.clone(), set, deformed, up));
     }
 
-    // The model's own floor: the same model on the full-resolution set, the same folds.
-    let floor = if args.no_floor {
-        None
-    } else {
+    // The model's own floor: the same model on the full-resolution set, the same folds
+    // (none for the rig's skinning: at full resolution it is the ground truth).
+    let floor = match model.pose_model() {
+        Some(model) if !args.no_floor => Some(model),
+        _ => None,
+    };
+    let floor = if let Some(model) = floor {
         let floor_started = Instant::now();
         let floor =
             model_floor(&inputs, model, args.folds).context("the model's floor at full resolution")?;
@@ -214,6 +232,8 @@ fn evaluate_dataset(
             floor.v2v_ratio()
         ));
         Some(report::FloorReport::new(&floor, seconds))
+    } else {
+        None
     };
 
     // Step 3: every deformed pose against both ground truths.
@@ -239,9 +259,19 @@ fn evaluate_dataset(
 
     // Step 4: reports, figures, meshes, sweep — into a temporary folder first.
     let regions = regions::Regions::new(&poses.template_mesh(), &inputs.labels);
-    let mut report =
-        build_report(pipeline, dataset, &inputs, target, &folds, &evaluated, &runs, &regions, &fitted);
-    report.model = args.model.clone();
+    let baseline = match &args.baseline {
+        Some(b) => b.clone(),
+        None if matches!(model, model::EvalModel::Rig)
+            && runs.iter().any(|r| r.method.name() == "gltfpack") =>
+        {
+            "gltfpack".into()
+        }
+        None => BASELINE.into(),
+    };
+    let mut report = build_report(
+        pipeline, dataset, &inputs, target, &folds, &evaluated, &runs, &regions, &fitted, &baseline,
+    );
+    report.model = model_name;
     report.floor = floor;
     report.measure_seconds = measure_seconds;
     let eval_dir = dataset.out_dir.join("eval");
@@ -252,7 +282,7 @@ fn evaluate_dataset(
             files.push("deformed/<method>/{in-sample,held-out,ground-truth}/<pose>.ply".into());
         }
         if args.sweep {
-            let points = sweep::run_sweep(&inputs, &args.sweep_vertices, &folds, &evaluated, model, &log);
+            let points = sweep::run_sweep(&inputs, &args.sweep_vertices, &folds, &evaluated, &model, &log);
             desal_io::write_json(&dir.join("sweep.json"), &points)?;
             desal_io::write_atomic(&dir.join("sweep.png"), &figures::sweep_png(&sweep::panels(&points))?)?;
             files.extend(["sweep.json".into(), "sweep.png".into()]);
@@ -282,7 +312,8 @@ fn load_inputs(dataset: &Dataset, stages: &DatasetStages) -> Result<Inputs> {
     let simplification_poses = (0..poses.pose_count())
         .filter(|&p| p == poses.template || !excluded.contains(&poses.names[p]))
         .collect();
-    Ok(Inputs { poses, labels, weights, simplification_poses, base_config })
+    let rig = stages.rig.as_ref().map(|source| rig::RigModel::load(source, &poses)).transpose()?;
+    Ok(Inputs { poses, labels, weights, simplification_poses, base_config, rig })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -296,11 +327,12 @@ fn build_report(
     runs: &[MethodRun],
     regions: &regions::Regions,
     fitted: &desal_hierarchy::Upsampler,
+    baseline_name: &str,
 ) -> EvalReport {
     let poses = &inputs.poses;
     let mut methods: Vec<MethodReport> =
         runs.iter().map(|run| method_report(poses, evaluated, run, regions, fitted)).collect();
-    let baseline = methods.iter().position(|m| m.name == BASELINE);
+    let baseline = methods.iter().position(|m| m.name == baseline_name);
     if let Some(b) = baseline {
         let base_poses = methods[b].poses.clone();
         for (k, m) in methods.iter_mut().enumerate() {
@@ -333,7 +365,7 @@ fn build_report(
                 training_poses: desal_eval::training_poses(poses.pose_count(), test),
             })
             .collect(),
-        baseline: baseline.map(|_| BASELINE.to_owned()),
+        baseline: baseline.map(|_| baseline_name.to_owned()),
         methods,
         joint_band_radius: regions.radius,
         model: String::new(),

@@ -11,8 +11,9 @@ use desal_simplify::Target;
 use serde::Serialize;
 
 use super::figures::SweepPanel;
-use super::measure::{Run, deform, measure};
+use super::measure::{Run, measure};
 use super::methods::{Inputs, Method, simplify_and_map};
+use super::model::EvalModel;
 use super::report::{Figures, Summary, summarise};
 
 /// The methods a sweep compares.
@@ -39,7 +40,7 @@ pub fn run_sweep(
     counts: &[usize],
     folds: &[Vec<usize>],
     evaluated: &[usize],
-    model: &desal_eval::PoseModel,
+    model: &EvalModel,
     log: &dyn Fn(&str),
 ) -> Vec<SweepPoint> {
     let methods: Vec<Method> =
@@ -50,7 +51,7 @@ pub fn run_sweep(
         for method in &methods {
             let started = Instant::now();
             let result = simplify_and_map(method, inputs, Target::Vertices(count)).and_then(|set| {
-                let deformed = deform(&set.mapped.poses, &set.mapped.labels, folds, model)?;
+                let deformed = model.deform(inputs, &set, folds)?;
                 Ok((set, deformed))
             });
             let seconds = started.elapsed().as_secs_f64();

@@ -109,6 +109,42 @@ fn optimal_placement_writes_at_most_four_refitted_weights() {
     assert!(figures["refitted_vertices"].as_u64().unwrap() > 0, "{figures}");
 }
 
+/// `max_influences = 4`: every kept vertex keeps its own four largest joints (the sample
+/// has up to 7), renormalised; the glb passes the reader's sum-to-one check.
+#[test]
+fn max_influences_caps_subset_weights_at_the_largest_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = std::fs::read(sample_rig()).unwrap();
+    let pipeline = write_rig_pipeline(dir.path(), &input, "target_vertices = 2676\nplacement = \"subset\"");
+    let text =
+        std::fs::read_to_string(&pipeline).unwrap().replace("frames = 11", "frames = 11\nmax_influences = 4");
+    std::fs::write(&pipeline, text).unwrap();
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let original = read(&sample_rig());
+    assert!(original.mesh.influences.max_influences() > 4);
+    let simplified = read(&dir.path().join("out/avatar/simplified.glb"));
+    assert_eq!(simplified.mesh.influences.max_influences(), 4);
+    let by_position: std::collections::HashMap<[u32; 3], usize> = (0..original.mesh.vertex_count())
+        .map(|v| (original.mesh.positions[v].map(f32::to_bits), v))
+        .collect();
+    for v in 0..simplified.mesh.vertex_count() {
+        let source = by_position[&simplified.mesh.positions[v].map(f32::to_bits)];
+        let mut own: Vec<(usize, f32)> = original.mesh.influences.of(source).collect();
+        own.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        own.truncate(4);
+        let mut kept: Vec<usize> = simplified.mesh.influences.of(v).map(|(j, _)| j).collect();
+        let mut largest: Vec<usize> = own.iter().map(|w| w.0).collect();
+        kept.sort_unstable();
+        largest.sort_unstable();
+        assert_eq!(kept, largest, "vertex {v}");
+    }
+    let figures: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("out/avatar/simplified-rig.json")).unwrap())
+            .unwrap();
+    assert_eq!(figures["max_influences"], 4, "{figures}");
+}
+
 #[test]
 fn a_rig_with_unnormalised_weights_fails_naming_file_and_vertex_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
@@ -228,4 +264,81 @@ fn desal_map_writes_the_simplified_rig_of_a_rig_pose_set() {
     assert!(!out.status.success());
     assert!(stderr(&out).contains("not from a skinned glTF rig"), "{}", stderr(&out));
     assert!(!refused.exists());
+}
+
+/// `desal eval` on a rig dataset (issue 15, item 4): the default model is the rig's own
+/// skinning. Subset placement keeps the exact weights, so every held-out frame skins its
+/// kept vertices exactly as the full rig does (v2v 0 up to f32 rounding) and nothing is
+/// fitted (held out = in-sample); optimal placement refits the weights on each fold's
+/// training frames, so held-out and in-sample differ, and no fold trains on a test frame.
+#[test]
+fn desal_eval_on_a_rig_skins_each_simplified_rig_with_its_own_weights() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = std::fs::read(sample_rig()).unwrap();
+    let pipeline = write_rig_pipeline(dir.path(), &input, "target_vertices = 2676");
+    let out = desal(&[
+        "eval",
+        pipeline.to_str().unwrap(),
+        "--methods",
+        "qslim-subset,qslim-optimal,multipose",
+        "--folds",
+        "3",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("out/avatar/eval/eval.json")).unwrap())
+            .unwrap();
+    assert_eq!(report["model"], "rig");
+    assert!(report["floor"].is_null(), "the rig's skinning at full resolution is the ground truth");
+    assert_eq!(report["baseline"], "qslim-optimal", "gltfpack did not run");
+    let rows: std::collections::HashMap<String, &serde_json::Value> = report["methods"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| (m["name"].as_str().unwrap().to_owned(), m))
+        .collect();
+    let figure = |m: &str, split: &str, what: &str| -> f64 {
+        rows[m]["summary"][split]["vs_full"][what]["mean"].as_f64().unwrap()
+    };
+    for subset in ["qslim-subset", "multipose"] {
+        assert!(figure(subset, "held_out", "v2v") < 1e-12, "{subset}: kept vertices skin exactly");
+        assert!(figure(subset, "held_out", "v2f") > 1e-8, "{subset}: the coarse surface still differs");
+        assert_eq!(
+            figure(subset, "held_out", "v2f"),
+            figure(subset, "in_sample", "v2f"),
+            "nothing is fitted"
+        );
+    }
+    assert!(figure("qslim-optimal", "held_out", "v2v") > 1e-8, "moved vertices are not input vertices");
+    assert_ne!(figure("qslim-optimal", "held_out", "v2f"), figure("qslim-optimal", "in_sample", "v2f"));
+    for model in rows["qslim-optimal"]["models"].as_array().unwrap().iter().skip(1) {
+        let training: Vec<u64> =
+            model["training_poses"].as_array().unwrap().iter().map(|p| p.as_u64().unwrap()).collect();
+        let test = model["test_poses"].as_array().unwrap();
+        assert!(test.iter().all(|p| !training.contains(&p.as_u64().unwrap())), "{model}");
+        assert_eq!(model["joint_count"], 31);
+    }
+    let md = std::fs::read_to_string(dir.path().join("out/avatar/eval/eval.md")).unwrap();
+    assert!(md.contains("`rig`: the rig's own linear blend skinning"));
+    assert!(!md.contains("## Against the paper"), "the paper's comparison is SCAPE's");
+}
+
+/// The rig model and gltfpack need a rig: on pose files both are refused up front, and
+/// `--baseline` must name a method of the run.
+#[test]
+fn rig_model_and_gltfpack_are_refused_without_a_rig() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = crate::support::write_tube_dataset(dir.path(), "[dataset.simplify]\ntarget_vertices = 60");
+    let p = pipeline.to_str().unwrap();
+    let out = desal(&["eval", p, "--methods", "qslim-optimal", "--model", "rig", "--folds", "2", "--quiet"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("only a [dataset.rig] dataset"), "{}", stderr(&out));
+    let out = desal(&["eval", p, "--methods", "qslim-optimal,gltfpack", "--folds", "2", "--quiet"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("[dataset.rig] datasets only"), "{}", stderr(&out));
+    let out = desal(&["eval", p, "--methods", "qslim-optimal", "--baseline", "meshopt", "--quiet"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("--baseline meshopt is not one of the --methods"), "{}", stderr(&out));
+    assert!(!dir.path().join("out/tube/eval").exists(), "nothing written");
 }
