@@ -143,7 +143,9 @@ pub fn simplify_pose_set(
     let fit = fit(&params.fit, set, labels, progress)?;
     let saliency = saliency(&params.saliency, set, &fit.body)?;
     let simplified = if multipose {
-        simplify::compute_multipose(&config, set, labels)?
+        // `multipose` as `desal eval` runs it: no saliency weights on the cost.
+        let config = desal_simplify::SimplifyConfig { saliency: false, ..config };
+        simplify::compute_multipose(&config, set, &saliency.body.weights, labels)?
     } else {
         simplify::compute(&config, &set.template_mesh(), &saliency.body.weights, labels, progress)?
     };

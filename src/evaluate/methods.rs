@@ -7,6 +7,7 @@
 //! | `saliency-optimal`, `saliency-subset` | cost × saliency weight | greedy / subset |
 //! | `paper-optimal`, `paper-subset` | cost × saliency × edge length (the paper, Eq. 5) | greedy / subset |
 //! | `multipose` | Mohr & Gleicher 2003: quadrics summed over all poses, no saliency | subset |
+//! | `multipose-saliency`, `multipose-paper` | the same quadrics, the cost × saliency weight (and × edge length): issue 17's "saliency with multi-pose quadrics", measured worse than `multipose` (EVAL.md); named explicitly, not in `all` | subset |
 //! | `meshopt`, `meshopt-regularize`, `meshopt-priority` | meshoptimizer in-process (feature `meshopt`, on by default): plain, `Regularize`, the most salient vertices flagged `Priority` (`meshopt.rs`) | subset |
 //! | `meshlab`, `meshlab-saliency` | MeshLab's quadric edge collapse through pymeshlab (`$DESAL_PYTHON` or `python3`): plain, and stage 2's weights as vertex quality (`qualityweight`; `meshlab.rs`); named explicitly, not in `all` | greedy |
 //! | `gltfpack`, `gltfpack-sa` | rig datasets: gltfpack (`$DESAL_GLTFPACK` or `gltfpack`) on the rig file, `-si R -noq` (and `-sa`), its ratio bisected to the vertex target; its own skin is kept (`gltfpack.rs`); named explicitly, not in `all` | greedy (exact: it keeps input vertices) |
@@ -33,8 +34,9 @@ use crate::stages::{map, simplify};
 pub enum Method {
     /// Single-pose quadric simplification of the template.
     Quadric { cost: Cost, placement: Placement },
-    /// Multi-pose QEM (Mohr & Gleicher 2003), subset placement.
-    Multipose,
+    /// Multi-pose QEM (Mohr & Gleicher 2003), subset placement, its cost plain
+    /// (`multipose`) or weighted like stage 3's (`multipose-saliency`, `multipose-paper`).
+    Multipose(Cost),
     /// meshoptimizer, in-process.
     #[cfg(feature = "meshopt")]
     Meshopt(super::meshopt::Variant),
@@ -75,7 +77,8 @@ impl Method {
     pub fn name(&self) -> String {
         match self {
             Method::Quadric { cost, placement } => format!("{}-{}", cost.name(), placement.name()),
-            Method::Multipose => "multipose".into(),
+            Method::Multipose(Cost::Qslim) => "multipose".into(),
+            Method::Multipose(cost) => format!("multipose-{}", cost.name()),
             #[cfg(feature = "meshopt")]
             Method::Meshopt(variant) => variant.name().into(),
             Method::Meshlab(variant) => variant.name().into(),
@@ -100,7 +103,13 @@ impl Method {
             return Ok(Method::External { name: name.into(), path: PathBuf::from(path) });
         }
         if text == "multipose" {
-            return Ok(Method::Multipose);
+            return Ok(Method::Multipose(Cost::Qslim));
+        }
+        if let Some(cost) = text.strip_prefix("multipose-") {
+            let cost: Cost = cost.parse().map_err(|_| anyhow::anyhow!(unknown(text)))?;
+            if matches!(cost, Cost::Saliency | Cost::Paper) {
+                return Ok(Method::Multipose(cost));
+            }
         }
         if let Some(variant) = super::meshlab::Variant::ALL.into_iter().find(|v| v.name() == text) {
             return Ok(Method::Meshlab(variant));
@@ -147,7 +156,7 @@ impl Method {
     pub fn placement(&self) -> &'static str {
         match self {
             Method::Quadric { placement, .. } => placement.name(),
-            Method::Multipose => "subset",
+            Method::Multipose(_) => "subset",
             #[cfg(feature = "meshopt")]
             Method::Meshopt(_) => "subset",
             Method::Meshlab(_) => "optimal",
@@ -159,7 +168,7 @@ impl Method {
 
 fn unknown(text: &str) -> String {
     format!(
-        "unknown method '{text}': use {}, {}, a bare qslim/saliency/paper (both placements), all, or external:NAME=PATH",
+        "unknown method '{text}': use {}, {}, multipose-saliency, multipose-paper, a bare qslim/saliency/paper (both placements), all, or external:NAME=PATH",
         ALL.join(", "),
         OPTIONAL.join(", ")
     )
@@ -226,9 +235,9 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 .with_context(|| format!("{name}: stage 3"))?;
             (out.body, Some(out.summary.stop), out.note)
         }
-        Method::Multipose => {
-            let config =
-                SimplifyConfig { target, saliency: false, balance: false, ..inputs.base_config.clone() };
+        Method::Multipose(cost) => {
+            let (saliency, balance) = cost.switches();
+            let config = SimplifyConfig { target, saliency, balance, ..inputs.base_config.clone() };
             let poses = &inputs.poses;
             let seen = &inputs.simplification_poses;
             // A copy of the pose set only when `[saliency] exclude` hides some poses.
@@ -247,7 +256,7 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 };
                 &subset
             };
-            let out = simplify::compute_multipose(&config, quadric_poses, &inputs.labels)
+            let out = simplify::compute_multipose(&config, quadric_poses, &inputs.weights, &inputs.labels)
                 .with_context(|| format!("{name}: multi-pose simplification"))?;
             (out.body, Some(out.summary.stop), out.note)
         }
@@ -367,6 +376,12 @@ mod tests {
         let twice = Method::parse_list(&["paper".into(), "paper-subset".into()]).unwrap_err();
         assert!(twice.to_string().contains("named twice"), "{twice}");
         assert!(Method::parse("paper-best").is_err());
+        assert_eq!(
+            names(&["multipose-saliency", "multipose-paper"]),
+            ["multipose-saliency", "multipose-paper"]
+        );
+        assert!(Method::parse("multipose-qslim").is_err(), "that is `multipose`");
+        assert!(Method::parse("multipose-balance").is_err());
         assert!(Method::parse("external:paper-optimal=x.ply").is_err(), "shadows a built-in");
         assert!(Method::parse("external:a b=x.ply").is_err());
         #[cfg(feature = "meshopt")]

@@ -281,16 +281,24 @@ pub fn compute(
 }
 
 /// Multi-pose QEM (Mohr & Gleicher 2003) over `poses`, subset placement, as a stage-3
-/// output (`desal eval`'s `multipose`).
+/// output (`desal eval`'s `multipose` and its variants): with `config.saliency`, the cost
+/// is also weighted by stage 2's `weights`, as in [`compute`].
 pub fn compute_multipose(
     config: &SimplifyConfig,
     poses: &PoseSet,
+    weights: &[f64],
     labels: &PartLabels,
 ) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
     let labels = (config.part_borders != PartBorders::Ignore).then_some(labels.labels.as_slice());
-    let result = desal_simplify::simplify_multipose(poses, None, labels, config)?;
+    let weights = config.saliency.then_some(weights);
+    let result = desal_simplify::simplify_multipose(poses, weights, labels, config)?;
     let config = SimplifyConfig { placement: Placement::Subset, ..config.clone() };
-    Ok(output(&config, "multipose", &result))
+    let method = if config.saliency {
+        format!("multipose-{}", Cost::of(&config).name())
+    } else {
+        "multipose".to_owned()
+    };
+    Ok(output(&config, &method, &result))
 }
 
 fn output(
