@@ -191,6 +191,9 @@ pub struct Inputs {
     pub base_config: SimplifyConfig,
     /// A rig dataset's rig, posed at the pose set's frames.
     pub rig: Option<RigModel>,
+    /// The deformation model starts from a rigid fit of every part (every model but the
+    /// rig's own skinning), so each part must keep three non-collinear vertices.
+    pub part_fits: bool,
 }
 
 /// A method's registered simplified pose set.
@@ -328,7 +331,9 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
     let raw = simplify::mesh(&body);
     let mapped = map::map(&body, &inputs.poses, &inputs.labels)
         .with_context(|| format!("{name}: stage 4 (mapping to original vertices)"))?;
-    check_parts(&name, &mapped)?;
+    if inputs.part_fits {
+        check_parts(&name, &mapped)?;
+    }
     Ok(SimplifiedSet { raw, mapped, stop, note, simplify_seconds, skin })
 }
 

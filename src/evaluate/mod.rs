@@ -174,7 +174,8 @@ fn evaluate_dataset(
             eprintln!("eval {name}: {message}");
         }
     };
-    let inputs = load_inputs(dataset, stages)?;
+    let mut inputs = load_inputs(dataset, stages)?;
+    inputs.part_fits = model.pose_model().is_some();
     let poses = &inputs.poses;
     let target = match args.target_vertices {
         Some(v) => Target::Vertices(v),
@@ -313,7 +314,7 @@ fn load_inputs(dataset: &Dataset, stages: &DatasetStages) -> Result<Inputs> {
         .filter(|&p| p == poses.template || !excluded.contains(&poses.names[p]))
         .collect();
     let rig = stages.rig.as_ref().map(|source| rig::RigModel::load(source, &poses)).transpose()?;
-    Ok(Inputs { poses, labels, weights, simplification_poses, base_config, rig })
+    Ok(Inputs { poses, labels, weights, simplification_poses, base_config, rig, part_fits: true })
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -91,3 +91,23 @@ def test_a_failing_gltfpack_is_a_clear_error(tmp_path):
     assert run.returncode != 0
     assert "gltfpack" in run.stderr and "out of cheese" in run.stderr, run.stderr
     assert not (tmp_path / "out" / "rig-sample" / "eval").exists()
+
+
+def test_gltfpack_stopping_early_is_reported(tmp_path):
+    """At 350 vertices plain gltfpack stops at its error limit (417 on the sample): the
+    note says so and names the count to compare at, and desal still reaches 350 without
+    the part fits a pose model would need."""
+    require(DESAL.exists(), f"{DESAL} is not built (cargo build)")
+    command = gltfpack()
+    require(command is not None, "gltfpack is not installed (cd tests/gltf && npm ci)")
+    env = dict(os.environ, DESAL_GLTFPACK=command)
+    run = subprocess.run(
+        [str(DESAL), "eval", str(ROOT / "pipelines" / "rig-sample.toml"), "--methods", "qslim-optimal,gltfpack",
+         "--target-vertices", "350", "--folds", "2", "--out", str(tmp_path), "--quiet"],
+        env=env, capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    rows = {m["name"]: m for m in json.loads((tmp_path / "rig-sample" / "eval" / "eval.json").read_text())["methods"]}
+    assert rows["qslim-optimal"]["vertices"] == 350 and rows["qslim-optimal"]["stop"] == "target"
+    g = rows["gltfpack"]
+    assert g["vertices"] > 350 and g["stop"] != "target", g["simplify_note"]
+    assert "stopped early" in g["simplify_note"] and f"--target-vertices {g['vertices']}" in g["simplify_note"]
