@@ -6,6 +6,7 @@
 //! | `qslim-optimal`, `qslim-subset` | Garland–Heckbert cost, no saliency, no balance (the paper's baseline) | greedy / subset |
 //! | `saliency-optimal`, `saliency-subset` | cost × saliency weight | greedy / subset |
 //! | `paper-optimal`, `paper-subset` | cost × saliency × edge length (the paper, Eq. 5) | greedy / subset |
+//! | `desal` | desal's own (issue 17): the template's quadrics, each collapse ranked by its error per unit area (`normalized_error`, meshoptimizer's normalisation), no saliency, no balance (EVAL.md, "desal") | subset |
 //! | `multipose` | Mohr & Gleicher 2003: quadrics summed over all poses, no saliency | subset |
 //! | `multipose-saliency`, `multipose-paper` | the same quadrics, the cost × saliency weight (and × edge length): issue 17's "saliency with multi-pose quadrics", measured worse than `multipose` (EVAL.md); named explicitly, not in `all` | subset |
 //! | `meshopt`, `meshopt-regularize`, `meshopt-priority` | meshoptimizer in-process (feature `meshopt`, on by default): plain, `Regularize`, the most salient vertices flagged `Priority` (`meshopt.rs`) | subset |
@@ -34,6 +35,8 @@ use crate::stages::{map, simplify};
 pub enum Method {
     /// Single-pose quadric simplification of the template.
     Quadric { cost: Cost, placement: Placement },
+    /// desal's own: area-normalised quadric error, subset placement.
+    Desal,
     /// Multi-pose QEM (Mohr & Gleicher 2003), subset placement, its cost plain
     /// (`multipose`) or weighted like stage 3's (`multipose-saliency`, `multipose-paper`).
     Multipose(Cost),
@@ -60,6 +63,7 @@ pub const ALL: &[&str] = &[
     "qslim-subset",
     "saliency-subset",
     "paper-subset",
+    "desal",
     "multipose",
     #[cfg(feature = "meshopt")]
     "meshopt",
@@ -77,6 +81,7 @@ impl Method {
     pub fn name(&self) -> String {
         match self {
             Method::Quadric { cost, placement } => format!("{}-{}", cost.name(), placement.name()),
+            Method::Desal => "desal".into(),
             Method::Multipose(Cost::Qslim) => "multipose".into(),
             Method::Multipose(cost) => format!("multipose-{}", cost.name()),
             #[cfg(feature = "meshopt")]
@@ -101,6 +106,9 @@ impl Method {
                 bail!("'{text}': NAME must be letters, digits, '-' or '_', and not a built-in method name");
             }
             return Ok(Method::External { name: name.into(), path: PathBuf::from(path) });
+        }
+        if text == "desal" {
+            return Ok(Method::Desal);
         }
         if text == "multipose" {
             return Ok(Method::Multipose(Cost::Qslim));
@@ -156,7 +164,7 @@ impl Method {
     pub fn placement(&self) -> &'static str {
         match self {
             Method::Quadric { placement, .. } => placement.name(),
-            Method::Multipose(_) => "subset",
+            Method::Desal | Method::Multipose(_) => "subset",
             #[cfg(feature = "meshopt")]
             Method::Meshopt(_) => "subset",
             Method::Meshlab(_) => "optimal",
@@ -232,6 +240,19 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 placement: *placement,
                 saliency,
                 balance,
+                ..inputs.base_config.clone()
+            };
+            let out = simplify::compute(&config, &template, &inputs.weights, &inputs.labels, &NoProgress)
+                .with_context(|| format!("{name}: stage 3"))?;
+            (out.body, Some(out.summary.stop), out.note)
+        }
+        Method::Desal => {
+            let config = SimplifyConfig {
+                target,
+                placement: Placement::Subset,
+                saliency: false,
+                balance: false,
+                normalized_error: true,
                 ..inputs.base_config.clone()
             };
             let out = simplify::compute(&config, &template, &inputs.weights, &inputs.labels, &NoProgress)

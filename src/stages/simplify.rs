@@ -47,6 +47,11 @@ pub struct SimplifyParams {
     /// the library's default when absent.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub boundary_weight: Option<f64>,
+    /// Rank collapses by the quadric error per unit area
+    /// ([`SimplifyConfig::normalized_error`], meshoptimizer's error; `desal eval`'s
+    /// `desal` method). Off (the paper's) when absent.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub normalized_error: bool,
 }
 
 impl Default for SimplifyParams {
@@ -62,6 +67,7 @@ impl Default for SimplifyParams {
             keep_part_borders: library.part_borders == PartBorders::Lock,
             metric: library.metric,
             boundary_weight: None,
+            normalized_error: library.normalized_error,
         }
     }
 }
@@ -100,6 +106,7 @@ impl SimplifyParams {
             part_borders: if self.keep_part_borders { PartBorders::Lock } else { PartBorders::Ignore },
             metric: self.metric,
             boundary_weight: self.boundary_weight.unwrap_or(library.boundary_weight),
+            normalized_error: self.normalized_error,
             ..library
         };
         config.validate()?;
@@ -128,6 +135,9 @@ impl SimplifyParams {
         });
         if let Some(w) = self.boundary_weight {
             parameters["boundary_weight"] = json!(w);
+        }
+        if self.normalized_error {
+            parameters["normalized_error"] = json!(true);
         }
         Ok(StageKey {
             stage: "simplify".into(),
@@ -162,13 +172,14 @@ fn resolved_json(config: &SimplifyConfig) -> String {
         max_corner_normal_deg,
         max_placement_distance,
         metric,
+        normalized_error,
     } = config;
     let part_borders = match part_borders {
         PartBorders::Ignore => json!("ignore"),
         PartBorders::Lock => json!("lock"),
         PartBorders::Constrain(w) => json!({ "constrain": w }),
     };
-    canonical_json(&json!({
+    let mut resolved = json!({
         "target": target_json(*target),
         "placement": placement.name(),
         "saliency": saliency,
@@ -179,7 +190,12 @@ fn resolved_json(config: &SimplifyConfig) -> String {
         "max_corner_normal_deg": max_corner_normal_deg,
         "max_placement_distance": max_placement_distance,
         "metric": metric.name(),
-    }))
+    });
+    // Only when on, so that every key made before the option existed still matches.
+    if *normalized_error {
+        resolved["normalized_error"] = json!(true);
+    }
+    canonical_json(&resolved)
 }
 
 /// Which factors of the paper's cost (Eq. 5) are on: the names of tables and reports.

@@ -206,6 +206,9 @@ pub(crate) struct Params {
     /// `-inf` when the corner-normal guard is off (180°).
     pub(crate) cos_max_corner_normal: f64,
     pub(crate) max_placement_distance: f64,
+    /// Quadric costs divided by the area their quadrics represent
+    /// ([`SimplifyConfig::normalized_error`]).
+    pub(crate) normalized_error: bool,
 }
 
 /// All mutable state of one simplification (see the module doc for the layout).
@@ -307,6 +310,7 @@ impl Engine {
                     config.max_corner_normal_deg.to_radians().cos()
                 },
                 max_placement_distance: config.max_placement_distance,
+                normalized_error: config.normalized_error,
             },
             pose_count,
             center,

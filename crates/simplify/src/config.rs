@@ -116,6 +116,13 @@ pub struct SimplifyConfig {
     /// The error ranking collapses and choosing optimal placements. Default:
     /// [`Metric::Quadric`] (the paper's). The report's errors are always quadric errors.
     pub metric: Metric,
+    /// With [`Metric::Quadric`], rank each collapse by its quadric error divided by the
+    /// face area its quadrics represent: a mean squared distance to the input surface
+    /// rather than an area-weighted sum (meshoptimizer's `quadricError` normalises so).
+    /// Large flat regions then cost no more to simplify than small curved ones, so the
+    /// budget moves to hands, feet and face. The placement is unchanged (the division
+    /// does not move the optimum). Default: false (Garland–Heckbert, the paper's).
+    pub normalized_error: bool,
 }
 
 impl Default for SimplifyConfig {
@@ -131,6 +138,7 @@ impl Default for SimplifyConfig {
             max_corner_normal_deg: 70.0,
             max_placement_distance: 2.0,
             metric: Metric::Quadric,
+            normalized_error: false,
         }
     }
 }

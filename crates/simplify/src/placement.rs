@@ -43,10 +43,19 @@ impl Engine {
         cost.is_finite().then_some(Candidate { cost, ..candidate })
     }
 
-    /// `error` times the enabled factors of Eq. 5: edge length, mean saliency weight.
+    /// `error` (per unit area with `normalized_error`) times the enabled factors of Eq.
+    /// 5: edge length, mean saliency weight.
     #[inline]
     fn cost_factors(&self, a: u32, b: u32, error: f64, pa: &Vec3, pb: &Vec3) -> f64 {
         let mut cost = error;
+        if self.params.normalized_error && self.params.metric == Metric::Quadric {
+            let pc = self.pose_count;
+            let (a, b) = (a as usize * pc, b as usize * pc);
+            let area: f64 = (0..pc).map(|p| self.quadrics[a + p].area + self.quadrics[b + p].area).sum();
+            if area > 0.0 {
+                cost /= area;
+            }
+        }
         if self.params.balance {
             cost *= (pa - pb).norm();
         }
