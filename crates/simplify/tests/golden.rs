@@ -51,5 +51,10 @@ fn simplify_with_seams_matches_its_golden_hash() {
         hash.points(&out.mesh.positions).indices(out.mesh.faces.iter().flatten().copied());
         hash.indices(out.simp_to_orig.iter().map(|o| o.unwrap_or(u32::MAX)));
     }
-    assert_golden("stage 3 (simplify) with seams", "desal_simplify::VERSION", hash.finish(), 0x1897dc9adb291d3f);
+    assert_golden(
+        "stage 3 (simplify) with seams",
+        "desal_simplify::VERSION",
+        hash.finish(),
+        0x1897dc9adb291d3f,
+    );
 }
