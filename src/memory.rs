@@ -139,6 +139,19 @@ pub fn simplify_pose_set(
     multipose: bool,
     progress: &dyn Progress,
 ) -> Result<Simplification> {
+    simplify_with_seams(params, set, labels, multipose, None, progress)
+}
+
+/// [`simplify_pose_set`] with the template's attribute seams handed to stage 3 (a rig's,
+/// as `desal run` hands them; `multipose` takes none).
+fn simplify_with_seams(
+    params: &StageParams,
+    set: &PoseSet,
+    labels: &PartLabels,
+    multipose: bool,
+    seams: Option<&[[u32; 2]]>,
+    progress: &dyn Progress,
+) -> Result<Simplification> {
     let config = params.simplify.config()?;
     let fit = fit(&params.fit, set, labels, progress)?;
     let saliency = saliency(&params.saliency, set, &fit.body)?;
@@ -147,7 +160,8 @@ pub fn simplify_pose_set(
         let config = desal_simplify::SimplifyConfig { saliency: false, ..config };
         simplify::compute_multipose(&config, set, &saliency.body.weights, labels)?
     } else {
-        simplify::compute(&config, &set.template_mesh(), &saliency.body.weights, labels, progress)?
+        let template = set.template_mesh();
+        simplify::compute_with_seams(&config, &template, &saliency.body.weights, labels, seams, progress)?
     };
     let map = map::compute(&simplified.body, set, labels)?;
     Ok(Simplification { fit, saliency, simplified, map })
@@ -181,7 +195,13 @@ pub fn simplify_rig(
     let set = ingest.body.to_pose_set().with_context(|| format!("{}", file.display()))?;
     let labels = input.compute_labels(&set)?;
     let part_labels = labels.body.to_labels().with_context(|| format!("{}", file.display()))?;
-    let stages = simplify_pose_set(params, &set, &part_labels, multipose, progress)?;
+    let seams = if params.simplify.keeps_seams() && !multipose {
+        Some(crate::stages::seams::rig_seam_edges(&input, set.vertex_count())?)
+    } else {
+        None
+    };
+    let seam_edges = seams.as_ref().map(|s| s.edges.as_slice());
+    let stages = simplify_with_seams(params, &set, &part_labels, multipose, seam_edges, progress)?;
     let (glb, summary) =
         crate::stages::rig::simplified_glb(&input.to_owned(), &stages.simplified.body, &stages.map.body)?;
     Ok(RigSimplification { glb, rig: summary, ingest, labels, stages })

@@ -202,6 +202,10 @@ pub struct Inputs {
     /// The deformation model starts from a rigid fit of every part (every model but the
     /// rig's own skinning), so each part must keep three non-collinear vertices.
     pub part_fits: bool,
+    /// A rig dataset's attribute seams, when the pipeline keeps them (`desal run`'s
+    /// stage 3 does): the template-quadric methods keep them too, so that each method's
+    /// mesh is the one `desal run` would write (`multipose` and other tools take none).
+    pub seams: Option<Vec<[u32; 2]>>,
 }
 
 /// A method's registered simplified pose set.
@@ -242,8 +246,16 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 balance,
                 ..inputs.base_config.clone()
             };
-            let out = simplify::compute(&config, &template, &inputs.weights, &inputs.labels, &NoProgress)
-                .with_context(|| format!("{name}: stage 3"))?;
+            let seams = inputs.seams.as_deref();
+            let out = simplify::compute_with_seams(
+                &config,
+                &template,
+                &inputs.weights,
+                &inputs.labels,
+                seams,
+                &NoProgress,
+            )
+            .with_context(|| format!("{name}: stage 3"))?;
             (out.body, Some(out.summary.stop), out.note)
         }
         Method::Desal => {
@@ -255,8 +267,16 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 normalized_error: true,
                 ..inputs.base_config.clone()
             };
-            let out = simplify::compute(&config, &template, &inputs.weights, &inputs.labels, &NoProgress)
-                .with_context(|| format!("{name}: stage 3"))?;
+            let seams = inputs.seams.as_deref();
+            let out = simplify::compute_with_seams(
+                &config,
+                &template,
+                &inputs.weights,
+                &inputs.labels,
+                seams,
+                &NoProgress,
+            )
+            .with_context(|| format!("{name}: stage 3"))?;
             (out.body, Some(out.summary.stop), out.note)
         }
         Method::Multipose(cost) => {

@@ -14,6 +14,7 @@ pub mod parts;
 pub mod rig;
 pub mod runner;
 pub mod saliency;
+pub mod seams;
 pub mod simplify;
 
 use std::cell::OnceCell;
@@ -164,15 +165,28 @@ pub fn run_stages(
         saliency::compute(inputs.saliency, fitted.body()?, set()?.template_mesh().diagonal())
     })?;
 
-    // Stage 3: saliency-weighted quadric simplification of the template.
-    let key = inputs.simplify.key(poses.hash, salient.hash, labels.hash)?;
+    // Stage 3: saliency-weighted quadric simplification of the template, keeping a rig's
+    // attribute seams as polylines unless told to ignore them (keyed by their content).
+    let seam_edges = match &inputs.rig {
+        Some(rig) if inputs.simplify.keeps_seams() => {
+            Some(seams::rig_seam_edges(rig, poses.summary.vertices)?)
+        }
+        _ => None,
+    };
+    let key = inputs.simplify.key_with_seams(
+        poses.hash,
+        salient.hash,
+        labels.hash,
+        seam_edges.as_ref().map(|s| s.hash),
+    )?;
     let simplified = runner.stage(Stage::Simplify, key, &[], || {
         let config = inputs.simplify.config()?;
-        simplify::compute(
+        simplify::compute_with_seams(
             &config,
             &set()?.template_mesh(),
             &salient.body()?.weights,
             part_labels()?,
+            seam_edges.as_ref().map(|s| s.edges.as_slice()),
             progress,
         )
     })?;

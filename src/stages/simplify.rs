@@ -1,6 +1,7 @@
 //! Stage 3: its parameters and their validation, its cache key, and the one path into
 //! `desal-simplify` that `desal run`, `desal simplify` and every `desal eval` method
-//! share (which inputs get the weights and the labels, the artifact conversion).
+//! share (which inputs get the weights, the labels and the seams, the artifact
+//! conversion).
 
 use anyhow::{Result, bail};
 use desal_io::artifact::{ArtifactKind, ContentHash, SimplifiedV1};
@@ -52,6 +53,23 @@ pub struct SimplifyParams {
     /// `desal` method). Off (the paper's) when absent.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub normalized_error: bool,
+    /// What stage 3 does with a dataset's attribute seams (a rig's UV and normal seams;
+    /// pose-file datasets have none): `keep` them as polylines (the default when absent)
+    /// or `ignore` them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seams: Option<Seams>,
+}
+
+/// `seams = "keep" | "ignore"` (see [`SimplifyParams::seams`]).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Seams {
+    /// Hand the seam edges to stage 3: a seam vertex collapses only along its seam, so
+    /// every simplified face stays in one UV chart.
+    #[default]
+    Keep,
+    /// Simplify as if the surface had no seams (what desal did before seams were kept).
+    Ignore,
 }
 
 impl Default for SimplifyParams {
@@ -68,6 +86,7 @@ impl Default for SimplifyParams {
             metric: library.metric,
             boundary_weight: None,
             normalized_error: library.normalized_error,
+            seams: None,
         }
     }
 }
@@ -113,10 +132,28 @@ impl SimplifyParams {
         Ok(config)
     }
 
-    /// The cache key of a simplification of `poses`' template. The resolved part holds
-    /// every field of the library configuration; the inputs only what the cost uses
-    /// (the saliency when weighted, the labels when part borders are kept).
+    /// Whether a dataset's seams go to stage 3 (`seams` absent or `keep`).
+    pub fn keeps_seams(&self) -> bool {
+        self.seams.unwrap_or_default() == Seams::Keep
+    }
+
+    /// The cache key of a simplification of `poses`' template without seams. The
+    /// resolved part holds every field of the library configuration; the inputs only
+    /// what the cost uses (the saliency when weighted, the labels when part borders are
+    /// kept).
     pub fn key(&self, poses: ContentHash, saliency: ContentHash, labels: ContentHash) -> Result<StageKey> {
+        self.key_with_seams(poses, saliency, labels, None)
+    }
+
+    /// [`Self::key`] for a simplification that is handed seam edges (`seams`: their
+    /// content hash, an input of the key), or none.
+    pub fn key_with_seams(
+        &self,
+        poses: ContentHash,
+        saliency: ContentHash,
+        labels: ContentHash,
+        seams: Option<ContentHash>,
+    ) -> Result<StageKey> {
         let config = self.config()?;
         let mut inputs = vec![("poses".to_owned(), poses)];
         if config.saliency {
@@ -124,6 +161,9 @@ impl SimplifyParams {
         }
         if config.part_borders != PartBorders::Ignore {
             inputs.push(("labels".into(), labels));
+        }
+        if let Some(seams) = seams {
+            inputs.push(("seams".into(), seams));
         }
         let mut parameters = json!({
             "target": target_json(config.target),
@@ -138,6 +178,9 @@ impl SimplifyParams {
         }
         if self.normalized_error {
             parameters["normalized_error"] = json!(true);
+        }
+        if let Some(mode) = self.seams {
+            parameters["seams"] = json!(mode);
         }
         Ok(StageKey {
             stage: "simplify".into(),
@@ -268,7 +311,13 @@ pub struct SimplifySummary {
     /// Refused by the fold guard (`max_corner_normal_deg`), counted apart from flips.
     pub refused_fold: usize,
     pub refused_degenerate: usize,
+    /// Refused by the seam rule; present when the input had seams.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refused_seam: Option<usize>,
     pub locked_vertices: usize,
+    /// Input vertices on a seam; present when the input had seams.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub seam_vertices: Option<usize>,
     pub max_error: f64,
     pub mean_error: f64,
     pub edge_length_mean: f64,
@@ -285,7 +334,23 @@ pub fn compute(
     labels: &PartLabels,
     progress: &dyn desal_mesh::Progress,
 ) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
+    compute_with_seams(config, template, weights, labels, None, progress)
+}
+
+/// [`compute`] with the template's attribute seams (`[lo, hi]` vertex pairs of the
+/// template, `stages::seams`), which stage 3 keeps as polylines, or none.
+pub fn compute_with_seams(
+    config: &SimplifyConfig,
+    template: &TriMesh,
+    weights: &[f64],
+    labels: &PartLabels,
+    seams: Option<&[[u32; 2]]>,
+    progress: &dyn desal_mesh::Progress,
+) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
     let mut input = SimplifyInput::new(template);
+    if let Some(seams) = seams {
+        input = input.with_seams(seams);
+    }
     if config.saliency {
         input = input.with_weights(weights);
     }
@@ -337,7 +402,9 @@ fn output(
         refused_flip: r.refusals.flip,
         refused_fold: r.refusals.fold,
         refused_degenerate: r.refusals.degenerate,
+        refused_seam: (r.seam_vertices > 0).then_some(r.refusals.seam),
         locked_vertices: r.locked_vertices,
+        seam_vertices: (r.seam_vertices > 0).then_some(r.seam_vertices),
         max_error: r.max_error,
         mean_error: r.mean_error,
         edge_length_mean: r.edge_length_mean,
@@ -445,6 +512,30 @@ mod tests {
         let other = other.key(hash, hash, hash).unwrap();
         assert_ne!(default.hash(), other.hash());
         assert!(other.parameters.contains("\"boundary_weight\":2.0"), "{}", other.parameters);
+    }
+
+    /// The seams enter the key as an input when they are handed to stage 3, and the
+    /// setting enters the producer's parameters only when set; a key without seams is
+    /// the key stage 3 always had.
+    #[test]
+    fn seams_and_their_setting_enter_the_key() {
+        let hash = ContentHash::of(b"poses");
+        let (one, other) = (ContentHash::of(b"seams 1"), ContentHash::of(b"seams 2"));
+        let default = SimplifyParams::default();
+        let plain = default.key(hash, hash, hash).unwrap();
+        assert_eq!(plain, default.key_with_seams(hash, hash, hash, None).unwrap());
+        assert!(!plain.parameters.contains("seams") && plain.inputs.iter().all(|(role, _)| role != "seams"));
+        let kept = default.key_with_seams(hash, hash, hash, Some(one)).unwrap();
+        assert_ne!(kept.hash(), plain.hash());
+        assert_ne!(kept.hash(), default.key_with_seams(hash, hash, hash, Some(other)).unwrap().hash());
+        let ignore = SimplifyParams { seams: Some(Seams::Ignore), ..SimplifyParams::default() };
+        assert!(!ignore.keeps_seams() && default.keeps_seams());
+        let ignored = ignore.key(hash, hash, hash).unwrap();
+        assert!(ignored.parameters.contains("\"seams\":\"ignore\""), "{}", ignored.parameters);
+        assert_ne!(ignored.hash(), plain.hash());
+        let parsed: SimplifyParams = toml::from_str("seams = \"ignore\"").unwrap();
+        assert_eq!(parsed.seams, Some(Seams::Ignore));
+        assert!(toml::from_str::<SimplifyParams>("seams = \"weld\"").is_err());
     }
 
     /// The pipeline's defaults are the library's, field by field.

@@ -28,6 +28,7 @@ pub mod parts;
 pub mod pose;
 pub mod read;
 pub mod refit;
+pub mod seams;
 pub mod simplified;
 pub mod viewer;
 pub mod weld;
@@ -43,6 +44,7 @@ pub use model::{
 pub use parts::{PartsConfig, dominant_joint_parts};
 pub use pose::{Frame, FrameConfig, PoseSource, joint_matrices, sample_frames, skin_points};
 pub use read::{ReadOptions, read_rig, read_rig_from};
+pub use seams::seam_edges;
 pub use simplified::{
     PoseTargets, SimplifiedInput, SimplifiedReport, WeightOptions, simplified_influences, simplified_rig,
     simplified_rig_with,

@@ -230,11 +230,13 @@ fn dominant_joint_parts_split_the_limb_at_its_joint() {
     assert_eq!(merged.names, ["upper"]);
 }
 
-/// Simplifies the welded limb to `target` vertices with stage 3 and maps it with stage 4.
+/// Simplifies the welded limb to `target` vertices with stage 3 (its seams kept when
+/// `seams` is true) and maps it with stage 4.
 fn simplify_limb(
     rig: &Rig,
     placement: desal_simplify::Placement,
     target: usize,
+    seams: bool,
 ) -> (desal_rig::PosedRig, TriMesh, Vec<u32>) {
     let config = FrameConfig { source: PoseSource::Both, frames: 6, seed: 1, max_degrees: 30.0 };
     let frames = sample_frames(rig, &config, Path::new("limb.glb")).unwrap();
@@ -245,8 +247,12 @@ fn simplify_limb(
         placement,
         ..desal_simplify::SimplifyConfig::default()
     };
-    let simplified =
-        desal_simplify::simplify(&desal_simplify::SimplifyInput::new(&template), &simplify_config).unwrap();
+    let seam_edges = desal_rig::seam_edges(&rig.mesh, &posed.weld);
+    let mut input = desal_simplify::SimplifyInput::new(&template);
+    if seams {
+        input = input.with_seams(&seam_edges);
+    }
+    let simplified = desal_simplify::simplify(&input, &simplify_config).unwrap();
     let labels = desal_mesh::PartLabels::from_ids(vec![0; template.vertex_count()]);
     let mode = match simplified.subset_indices() {
         Some(_) => "subset",
@@ -277,7 +283,7 @@ fn chart(uv: [f32; 2]) -> u8 {
 #[test]
 fn the_simplified_limb_keeps_its_uv_seams_and_exact_weights_with_subset_placement() {
     let rig = limb();
-    let (posed, mesh, simp_to_welded) = simplify_limb(&rig, desal_simplify::Placement::Subset, 60);
+    let (posed, mesh, simp_to_welded) = simplify_limb(&rig, desal_simplify::Placement::Subset, 60, false);
     let input = SimplifiedInput {
         positions: &mesh.positions,
         faces: &mesh.faces,
@@ -329,10 +335,55 @@ fn the_simplified_limb_keeps_its_uv_seams_and_exact_weights_with_subset_placemen
     assert_eq!(back, out);
 }
 
+/// The weld's seam edges are exactly the two seams: the wrap seam along the limb (its
+/// `RINGS - 1` edges at segment 0) and the chart seam around it (the `SEGMENTS` edges of
+/// ring `MID`).
+#[test]
+fn the_seam_edges_are_the_wrap_seam_and_the_chart_seam() {
+    let rig = limb();
+    let posed = pose_rig(&rig, &[]).unwrap();
+    let seams = desal_rig::seam_edges(&rig.mesh, &posed.weld);
+    let at = |v: u32| posed.poses.poses[0][v as usize];
+    let mut wrap = 0;
+    let mut around = 0;
+    for &[a, b] in &seams {
+        let (pa, pb) = (at(a), at(b));
+        if pa.z.abs() < 1e-6 && pb.z.abs() < 1e-6 && pa.x > 0.0 && pb.x > 0.0 {
+            wrap += 1;
+        } else if (pa.y - 1.0).abs() < 1e-6 && (pb.y - 1.0).abs() < 1e-6 {
+            around += 1;
+        }
+    }
+    assert_eq!((wrap, around, seams.len()), (RINGS - 1, SEGMENTS, RINGS - 1 + SEGMENTS), "{seams:?}");
+}
+
+/// With its seams kept, the simplified limb has no face stretched across a UV chart
+/// (subset and optimal placement); without them, the same simplification has some.
+#[test]
+fn with_seams_kept_no_simplified_face_crosses_a_chart() {
+    let rig = limb();
+    let cross_chart = |placement, seams| {
+        let (posed, mesh, simp_to_welded) = simplify_limb(&rig, placement, 60, seams);
+        let input = SimplifiedInput {
+            positions: &mesh.positions,
+            faces: &mesh.faces,
+            simp_to_welded: &simp_to_welded,
+            subset: placement == desal_simplify::Placement::Subset,
+        };
+        let targets = PoseTargets { joints: &posed.joints, positions: &posed.poses.poses };
+        let (_, report) = simplified_rig(&rig, &posed.weld, &input, &targets).unwrap();
+        assert_eq!(report.simplified_vertices, 60);
+        report.cross_chart_faces
+    };
+    assert_eq!(cross_chart(desal_simplify::Placement::Subset, true), 0);
+    assert_eq!(cross_chart(desal_simplify::Placement::Optimal, true), 0);
+    assert!(cross_chart(desal_simplify::Placement::Subset, false) > 0);
+}
+
 #[test]
 fn optimal_placement_refits_at_most_four_normalised_weights() {
     let rig = limb();
-    let (posed, mesh, simp_to_welded) = simplify_limb(&rig, desal_simplify::Placement::Optimal, 60);
+    let (posed, mesh, simp_to_welded) = simplify_limb(&rig, desal_simplify::Placement::Optimal, 60, false);
     let input = SimplifiedInput {
         positions: &mesh.positions,
         faces: &mesh.faces,

@@ -2,7 +2,7 @@
 //! [`simplify_multipose`] validate the configuration and the input here, then hand
 //! them to the engine (`collapse::run_engine`).
 
-use desal_mesh::{Progress, TriMesh, Vec3};
+use desal_mesh::{Progress, TriMesh, Vec3, VertexFaces};
 
 use crate::collapse::run_engine;
 use crate::config::{Placement, SimplifyConfig};
@@ -26,9 +26,9 @@ pub fn simplify_with_progress(
     progress: &dyn Progress,
 ) -> Result<Simplified, SimplifyError> {
     config.validate()?;
-    check_input(input.mesh, input.weights, input.part_labels)?;
+    check_input(input)?;
     let poses = [input.mesh.positions.as_slice()];
-    run_engine(&poses, 0, input.mesh, input.weights, input.part_labels, config, progress)
+    run_engine(&poses, 0, input, config, progress)
 }
 
 /// Mohr and Gleicher 2003 multi-pose QEM: every vertex's quadric is kept per pose (the
@@ -38,6 +38,7 @@ pub fn simplify_with_progress(
 /// invented in every pose); `config.placement` is ignored. The fold-over and
 /// degeneracy safeguards look at the template pose. `weights`, `part_labels`, balance
 /// and the target behave as in [`simplify`]; the output is the simplified template.
+/// There are no seams.
 pub fn simplify_multipose(
     poses: &desal_mesh::PoseSet,
     weights: Option<&[f64]>,
@@ -46,18 +47,16 @@ pub fn simplify_multipose(
 ) -> Result<Simplified, SimplifyError> {
     config.validate()?;
     let template = poses.template_mesh();
-    check_input(&template, weights, part_labels)?;
+    let input = SimplifyInput { mesh: &template, weights, part_labels, seams: None };
+    check_input(&input)?;
     let positions: Vec<&[Vec3]> = poses.poses.iter().map(|p| p.as_slice()).collect();
     let config = SimplifyConfig { placement: Placement::Subset, ..config.clone() };
-    run_engine(&positions, poses.template, &template, weights, part_labels, &config, &desal_mesh::NoProgress)
+    run_engine(&positions, poses.template, &input, &config, &desal_mesh::NoProgress)
 }
 
 /// Validates sizes and values the engine relies on; errors name the offending element.
-fn check_input(
-    mesh: &TriMesh,
-    weights: Option<&[f64]>,
-    part_labels: Option<&[u32]>,
-) -> Result<(), SimplifyError> {
+fn check_input(input: &SimplifyInput<'_>) -> Result<(), SimplifyError> {
+    let SimplifyInput { mesh, weights, part_labels, seams } = *input;
     let n = mesh.positions.len();
     if n == 0 || mesh.faces.is_empty() {
         return Err(SimplifyError::EmptyMesh { vertices: n, faces: mesh.faces.len() });
@@ -82,6 +81,27 @@ fn check_input(
         && l.len() != n
     {
         return Err(SimplifyError::LabelCountMismatch { labels: l.len(), vertices: n });
+    }
+    if let Some(seams) = seams {
+        check_seams(mesh, seams)?;
+    }
+    Ok(())
+}
+
+/// Every seam is an edge of the mesh: two distinct vertices in range that share a face.
+fn check_seams(mesh: &TriMesh, seams: &[[u32; 2]]) -> Result<(), SimplifyError> {
+    let n = mesh.positions.len();
+    for (seam, &[a, b]) in seams.iter().enumerate() {
+        if let Some(&vertex) = [a, b].iter().find(|&&v| v as usize >= n) {
+            return Err(SimplifyError::SeamIndexOutOfRange { seam, vertex, vertex_count: n });
+        }
+    }
+    let vertex_faces = VertexFaces::new(n, &mesh.faces);
+    for (seam, &[a, b]) in seams.iter().enumerate() {
+        let shared = a != b && vertex_faces.of(a).iter().any(|&f| mesh.faces[f as usize].contains(&b));
+        if !shared {
+            return Err(SimplifyError::SeamNotAnEdge { seam, a, b });
+        }
     }
     Ok(())
 }

@@ -1,8 +1,13 @@
 //! Phase 1 of the engine, as functions over explicit arrays: the face quadrics and input
 //! normals, the vertex normals, and per vertex its flags (boundary, non-manifold, part
-//! border) and its quadric (face planes plus boundary and part-border constraint planes,
-//! per pose). meshoptimizer's `fillFaceQuadrics`, `fillEdgeQuadrics` and
-//! `classifyVertices`.
+//! border, seam) and its quadric (face planes plus boundary, part-border and seam
+//! constraint planes, per pose). meshoptimizer's `fillFaceQuadrics`, `fillEdgeQuadrics`
+//! and `classifyVertices`.
+//!
+//! Seam vertices, as meshoptimizer classifies them: a vertex with exactly two seam edges
+//! and no boundary edge is `SEAM` (meshoptimizer's `Kind_Seam`: it may collapse along its
+//! seam only); any other vertex on a seam — a seam's end, a junction of three or more
+//! seam edges, a seam meeting the boundary — is `PINNED` (`Kind_Locked`).
 
 use desal_mesh::Vec3;
 use rayon::prelude::*;
@@ -10,6 +15,7 @@ use rayon::prelude::*;
 use crate::config::{PartBorders, SimplifyConfig};
 use crate::face_lists::FaceLists;
 use crate::quadric::{FacePlane, Quadric};
+use crate::seams::SeamGraph;
 
 /// Vertex flags, one byte per slot: the slot holds a vertex with faces.
 pub(crate) const ALIVE: u8 = 1;
@@ -20,6 +26,16 @@ pub(crate) const BOUNDARY: u8 = 2;
 pub(crate) const FROZEN: u8 = 4;
 /// The vertex keeps its position and is never removed; it may absorb neighbours.
 pub(crate) const PINNED: u8 = 8;
+/// The vertex is inside a seam (exactly two seam edges, not on the boundary): it is
+/// removed only along one of its seam edges, and it may absorb neighbours.
+pub(crate) const SEAM: u8 = 16;
+
+/// Weight of the seam constraint planes, as [`SimplifyConfig::boundary_weight`] weighs
+/// the boundary's (× edge length², one plane per face along the edge). meshoptimizer's
+/// `kEdgeWeightSeam`: 1 where its boundary weight is 10, since the collapse rules already
+/// keep a seam a polyline and the planes only have to keep its shape, not its place on
+/// an open edge.
+pub(crate) const SEAM_WEIGHT: f64 = 1.0;
 
 /// Vertices (or faces, or edges) per work item of the parallel passes.
 pub(crate) const CHUNK: usize = 2048;
@@ -70,6 +86,7 @@ pub(crate) struct ClassifyInput<'a> {
     /// plane is computed where it is summed, per pose).
     pub(crate) face_planes: Option<&'a [FacePlane]>,
     pub(crate) part_labels: Option<&'a [u32]>,
+    pub(crate) seams: Option<&'a SeamGraph>,
     pub(crate) config: &'a SimplifyConfig,
 }
 
@@ -105,10 +122,13 @@ struct Constraints {
     boundary: Option<f64>,
     /// Part-border edges at the vertex are held with this weight.
     part_border: Option<f64>,
+    /// Seam edges at the vertex are held with [`SEAM_WEIGHT`].
+    seam: bool,
 }
 
 /// A vertex's flags: non-manifold (FROZEN) when an incident edge has more than two
-/// faces or its faces form more than one fan (a pinch, like SCAPE's vertex 419).
+/// faces or its faces form more than one fan (a pinch, like SCAPE's vertex 419); on a
+/// seam, `SEAM` or `PINNED` (see the module doc).
 fn classify_vertex(input: &ClassifyInput<'_>, link: &Link, v: u32) -> (u8, Constraints) {
     let config = input.config;
     let fans = link.neighbours.iter().enumerate().filter(|&(i, x)| x.parent as usize == i).count();
@@ -131,11 +151,17 @@ fn classify_vertex(input: &ClassifyInput<'_>, link: &Link, v: u32) -> (u8, Const
         _ => None,
     };
     let boundary = (on_boundary && config.boundary_weight > 0.0).then_some(config.boundary_weight);
-    (flags, Constraints { boundary, part_border })
+    let seam_edges = input.seams.map_or(0, |s| s.of(v).len());
+    if seam_edges == 2 && !on_boundary {
+        flags |= SEAM;
+    } else if seam_edges > 0 {
+        flags |= PINNED;
+    }
+    (flags, Constraints { boundary, part_border, seam: seam_edges > 0 })
 }
 
 /// Vertex `v`'s quadric in every pose, into `out` (one per pose): the planes of its
-/// faces and the constraint planes of its boundary and part-border edges.
+/// faces and the constraint planes of its boundary, part-border and seam edges.
 fn fill_vertex_quadrics(
     input: &ClassifyInput<'_>,
     link: &Link,
@@ -155,7 +181,7 @@ fn fill_vertex_quadrics(
                 Some(planes) if pose == 0 => q += &planes[f as usize].quadric(),
                 _ => q += &Quadric::from_triangle(&p0, &p1, &p2),
             }
-            if constraints.boundary.is_none() && constraints.part_border.is_none() {
+            if constraints.boundary.is_none() && constraints.part_border.is_none() && !constraints.seam {
                 continue;
             }
             let cross = (p1 - p0).cross(&(p2 - p0));
@@ -170,6 +196,9 @@ fn fill_vertex_quadrics(
                     && label_of(x) != label_of(v)
                 {
                     q += &Quadric::edge_constraint(pv, px, &cross, w);
+                }
+                if constraints.seam && input.seams.is_some_and(|s| s.joins(v, x)) {
+                    q += &Quadric::edge_constraint(pv, px, &cross, SEAM_WEIGHT);
                 }
             }
         }

@@ -9,7 +9,7 @@
 //! pass keeps its cost: the quadric cost depends on the endpoints alone), sort the cheap
 //! ones, choose in cost order those that share no endpoint, and perform them, each
 //! evaluated again on the current mesh (`placement.rs`) and re-checked against the
-//! safeguards (`safeguards.rs`: link condition, fold-over against
+//! safeguards (`safeguards.rs`: the seam rule, link condition, fold-over against
 //! the face itself and against its corners' input normals, degeneracy); finally compact
 //! the survivors into the output mesh. The phase names are meshoptimizer's
 //! (`pickEdgeCollapses`, `rankEdgeCollapses`, `sortEdgeCollapses`,
@@ -36,7 +36,7 @@ use desal_mesh::{Progress, TriMesh, Vec3};
 use rayon::prelude::*;
 
 use crate::classify::{
-    ALIVE, BOUNDARY, CHUNK, ClassifyInput, FROZEN, PINNED, classify_vertices, compute_input_normals,
+    ALIVE, BOUNDARY, CHUNK, ClassifyInput, FROZEN, PINNED, SEAM, classify_vertices, compute_input_normals,
     compute_vertex_normals, fill_face_planes,
 };
 use crate::config::{Metric, Placement, SimplifyConfig, Target};
@@ -44,8 +44,9 @@ use crate::error::SimplifyError;
 use crate::face_lists::FaceLists;
 use crate::marks::ScratchMarks;
 use crate::quadric::Quadric;
-use crate::report::{Refusals, SimplifyReport, StopReason, edge_length_stats};
-use crate::types::Simplified;
+use crate::report::{Refusal, Refusals, SimplifyReport, StopReason, edge_length_stats};
+use crate::seams::SeamGraph;
+use crate::types::{Simplified, SimplifyInput};
 
 /// A pass accepts collapses costing up to this factor times the cost of the last
 /// collapse still needed (meshoptimizer uses 1.5): many cheap candidates are skipped
@@ -61,18 +62,17 @@ const PASS_GOAL_FRACTION: f64 = 0.5;
 const MOVED: u32 = u32::MAX;
 
 /// The orchestrator shared by single- and multi-pose simplification, on validated
-/// input. `poses[p]` are the positions of pose `p` (one pose: `mesh.positions`); `mesh`
-/// is pose `template`.
+/// input. `poses[p]` are the positions of pose `p` (one pose: `input.mesh.positions`);
+/// `input.mesh` is pose `template`.
 pub(crate) fn run_engine(
     poses: &[&[Vec3]],
     template: usize,
-    mesh: &TriMesh,
-    weights: Option<&[f64]>,
-    part_labels: Option<&[u32]>,
+    input: &SimplifyInput<'_>,
     config: &SimplifyConfig,
     progress: &dyn Progress,
 ) -> Result<Simplified, SimplifyError> {
     let started = Instant::now();
+    let mesh = input.mesh;
     // Faces that repeat a vertex have no area and no orientation: they carry nothing a
     // collapse could preserve.
     let faces: Vec<[u32; 3]> =
@@ -81,7 +81,7 @@ pub(crate) fn run_engine(
         return Err(SimplifyError::EmptyMesh { vertices: mesh.positions.len(), faces: 0 });
     }
 
-    let mut engine = Engine::new(poses, template, mesh, faces, weights, part_labels, config);
+    let mut engine = Engine::new(poses, template, input, faces, config);
     let mut marks = ScratchMarks::new(mesh.positions.len());
     let target = StopAt::new(config, engine.lists.live_face_count());
     progress.begin("collapse edges", target.remaining(&engine) as u64);
@@ -236,6 +236,8 @@ pub(crate) struct Engine {
     /// surface orientation where a slot's vertex came from, whatever faces it has now.
     pub(crate) vertex_normals: Vec<Vec3>,
     pub(crate) flags: Vec<u8>,
+    /// The current seam edges, when the input has seams.
+    pub(crate) seams: Option<SeamGraph>,
     /// The pass in which each slot's set of neighbours last changed (0: never): its
     /// edges listed by earlier passes are stale.
     touched_in_pass: Vec<u32>,
@@ -254,6 +256,7 @@ pub(crate) struct Engine {
     error_max: f64,
     refusals: Refusals,
     locked_vertices: usize,
+    seam_vertices: usize,
 }
 
 impl Engine {
@@ -262,17 +265,17 @@ impl Engine {
     pub(crate) fn new(
         poses: &[&[Vec3]],
         template: usize,
-        mesh: &TriMesh,
+        input: &SimplifyInput<'_>,
         faces: Vec<[u32; 3]>,
-        weights: Option<&[f64]>,
-        part_labels: Option<&[u32]>,
         config: &SimplifyConfig,
     ) -> Self {
+        let SimplifyInput { mesh, weights, part_labels, seams } = *input;
         let n = mesh.positions.len();
         let pose_count = poses.len();
         let center = mesh.bounding_box().map_or(Vec3::zeros(), |(lo, hi)| (lo + hi) * 0.5);
         let local: Vec<Vec<Vec3>> = poses.iter().map(|p| p.iter().map(|x| x - center).collect()).collect();
         let lists = FaceLists::new(n, faces);
+        let seams = seams.map(|edges| SeamGraph::new(n, edges));
         // Each face's plane quadric once (a vertex sums those of its faces). Several
         // poses would need one per face and pose: those are computed where summed.
         let face_planes = (pose_count == 1).then(|| fill_face_planes(lists.faces(), &local[0]));
@@ -281,6 +284,7 @@ impl Engine {
             poses: &local,
             face_planes: face_planes.as_deref(),
             part_labels,
+            seams: seams.as_ref(),
             config,
         });
         // The planes go before the normals come: the two are never in memory together
@@ -290,6 +294,8 @@ impl Engine {
         let vertex_normals = compute_vertex_normals(&lists, &input_normals);
         let live_vertices = (0..n as u32).filter(|&v| lists.count(v) > 0).count();
         let locked_vertices = flags.iter().filter(|&&f| f & (FROZEN | PINNED) != 0).count();
+        let seam_vertices =
+            seams.as_ref().map_or(0, |s| (0..n as u32).filter(|&v| !s.of(v).is_empty()).count());
         let mut pose_positions = local;
         // One pose: the moving positions are the only copy; several: the template's
         // positions are copied out, since every pose's stay fixed for the cost.
@@ -324,6 +330,7 @@ impl Engine {
             input_normals,
             vertex_normals,
             flags,
+            seams,
             touched_in_pass: vec![0; n],
             changed_in_pass: vec![0; n],
             modified_in_pass: vec![0; n],
@@ -335,6 +342,7 @@ impl Engine {
             error_max: 0.0,
             refusals: Refusals::default(),
             locked_vertices,
+            seam_vertices,
         }
     }
 
@@ -448,6 +456,12 @@ impl Engine {
                     if self.changed_this_pass(a) || self.changed_this_pass(b) {
                         continue;
                     }
+                    // An edge the seam rule refuses both ways is refused before it holds its
+                    // endpoints for the pass: it would stay cheap, and block them in every one.
+                    if self.seams.is_some() && !self.seam_rule_allows_either(a, b) {
+                        self.refusals.count(Refusal::Seam);
+                        continue;
+                    }
                     self.changed_in_pass[a as usize] = self.pass;
                     self.changed_in_pass[b as usize] = self.pass;
                     chosen.push([a, b]);
@@ -506,6 +520,9 @@ impl Engine {
             }
         }
         self.lists.collapse(r, k);
+        if let Some(seams) = &mut self.seams {
+            seams.collapse(r, k);
+        }
         let pc = self.pose_count;
         for p in 0..pc {
             let qr = self.quadrics[r as usize * pc + p];
@@ -515,6 +532,8 @@ impl Engine {
             w[k as usize] = w[k as usize].max(w[r as usize]);
         }
         let (ku, ru) = (k as usize, r as usize);
+        // The seam rule only lets a seam vertex go into a seam vertex, so `keep` is one.
+        debug_assert!(self.flags[ru] & SEAM == 0 || self.flags[ku] & (SEAM | PINNED) != 0);
         self.flags[ku] |= self.flags[ru] & BOUNDARY;
         self.flags[ru] &= !ALIVE;
         self.modified_in_pass[ku] = self.pass;
@@ -563,6 +582,7 @@ impl Engine {
             stop,
             refusals: self.refusals,
             locked_vertices: self.locked_vertices,
+            seam_vertices: self.seam_vertices,
             max_error: self.error_max,
             mean_error: if self.collapses > 0 { self.error_sum / self.collapses as f64 } else { 0.0 },
             edge_length_mean,

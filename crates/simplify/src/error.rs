@@ -25,6 +25,12 @@ pub enum SimplifyError {
     /// The part labels are not one per vertex.
     #[error("{labels} part labels given for a mesh of {vertices} vertices (need one per vertex)")]
     LabelCountMismatch { labels: usize, vertices: usize },
+    /// A seam edge names a vertex past the end of the position array.
+    #[error("seam {seam} uses vertex {vertex}, but the mesh has only {vertex_count} vertices")]
+    SeamIndexOutOfRange { seam: usize, vertex: u32, vertex_count: usize },
+    /// A seam `[a, b]` is not an edge of the mesh (no face has both vertices, or `a == b`).
+    #[error("seam {seam} ({a}, {b}) is not an edge of the mesh")]
+    SeamNotAnEdge { seam: usize, a: u32, b: u32 },
     /// A ratio target outside `(0, 1]`.
     #[error("target ratio {ratio} is outside (0, 1]")]
     BadRatio { ratio: f64 },

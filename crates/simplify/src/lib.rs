@@ -1,7 +1,8 @@
 //! Stage 3: saliency-weighted quadric edge collapse (paper §3.1, Eq. 3–5; Garland and
 //! Heckbert 1997), and Mohr and Gleicher's multi-pose QEM (2003) for comparison.
 //!
-//! Entry points: [`simplify`] (one mesh, optional per-vertex weights and part labels)
+//! Entry points: [`simplify`] (one mesh, optional per-vertex weights, part labels and
+//! attribute seams, which survive as polylines: meshoptimizer's seam rules)
 //! and [`simplify_multipose`] (a registered pose set). Both return a [`Simplified`]:
 //! the mesh in the `simp_idx` space, `simp_to_orig` (for each `simp_idx`, the
 //! `orig_idx` whose exact position it kept, if any) and a [`SimplifyReport`].
@@ -25,6 +26,7 @@ mod placement;
 pub mod quadric;
 mod report;
 mod safeguards;
+mod seams;
 mod types;
 
 pub use api::{simplify, simplify_multipose, simplify_with_progress};

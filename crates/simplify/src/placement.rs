@@ -23,7 +23,7 @@ impl Engine {
         if (fa | fb) & FROZEN != 0 || (fa & fb) & PINNED != 0 {
             return None;
         }
-        let pinned = Pinned { a: fa & PINNED != 0, b: fb & PINNED != 0 };
+        let pinned = Pinned { a: fa & PINNED != 0, b: fb & PINNED != 0, seam_keeps: self.seam_keeps(a, b) };
         let (pa, pb) = (&self.positions[a as usize], &self.positions[b as usize]);
         let (candidate, error) = match self.params.metric {
             Metric::LindstromTurk => self.evaluate_lindstrom_turk(a, b, pinned),
@@ -34,7 +34,7 @@ impl Engine {
                         let keep = pinned.endpoint(a, b, |_| 0.0);
                         self.candidate_at(a, b, self.positions[keep as usize], keep)
                     }
-                    (Placement::Optimal, false) => self.place_optimally(a, b),
+                    (Placement::Optimal, false) => self.place_optimally(a, b, pinned.seam_keeps),
                 };
                 (c, c.error)
             }
@@ -85,7 +85,7 @@ impl Engine {
                 .filter(|p| (p - mid).norm() <= reach)
         };
         let (position, keep) = match computed {
-            Some(p) => (p, nearer_endpoint(a, b, &pa, &pb, &p)),
+            Some(p) => (p, pinned.seam_keeps.unwrap_or_else(|| nearer_endpoint(a, b, &pa, &pb, &p))),
             None => {
                 let keep = pinned.endpoint(a, b, |k| n.cost(&self.positions[k as usize], squared_length));
                 (self.positions[keep as usize], keep)
@@ -123,11 +123,12 @@ impl Engine {
     }
 
     /// Optimal placement (single pose): the quadric's minimiser if well-conditioned and
-    /// near the edge, else the best point of the segment, else the better endpoint.
-    fn place_optimally(&self, a: u32, b: u32) -> Candidate {
+    /// near the edge, else the best point of the segment, else the better endpoint. The
+    /// slot kept is `seam_keeps` when the seam rule names one, else the nearer endpoint.
+    fn place_optimally(&self, a: u32, b: u32, seam_keeps: Option<u32>) -> Candidate {
         let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
         let (position, error) = self.optimal_position(a, b);
-        let keep = nearer_endpoint(a, b, &pa, &pb, &position);
+        let keep = seam_keeps.unwrap_or_else(|| nearer_endpoint(a, b, &pa, &pb, &position));
         let remove = if keep == a { b } else { a };
         Candidate { remove, keep, position, error, cost: 0.0 }
     }
@@ -159,7 +160,8 @@ impl Engine {
 
     /// The cost of collapsing `(a, b)`, infinite when it may not collapse: what
     /// [`Self::evaluate`] gives, without choosing the slot kept (the common case, an
-    /// optimal quadric placement with neither endpoint pinned, has a short path).
+    /// optimal quadric placement with neither endpoint pinned, has a short path; the seam
+    /// rule changes only which slot an optimal placement keeps, not its cost).
     #[inline]
     pub(crate) fn cost_of(&self, a: u32, b: u32) -> f64 {
         let full = || self.evaluate(a, b).map_or(f64::INFINITY, |c| c.cost);
@@ -177,6 +179,18 @@ impl Engine {
         cost
     }
 
+    /// The endpoint the seam rule keeps when it lets only the other one go (`None`: both
+    /// may go, or neither, which `check_seam_rule` refuses).
+    #[inline]
+    fn seam_keeps(&self, a: u32, b: u32) -> Option<u32> {
+        self.seams.as_ref()?;
+        match (self.seam_rule_lets_remove(a, b), self.seam_rule_lets_remove(b, a)) {
+            (false, true) => Some(a),
+            (true, false) => Some(b),
+            _ => None,
+        }
+    }
+
     fn candidate_at(&self, a: u32, b: u32, position: Vec3, keep: u32) -> Candidate {
         let remove = if keep == a { b } else { a };
         let q = self.quadrics[a as usize] + self.quadrics[b as usize];
@@ -184,11 +198,15 @@ impl Engine {
     }
 }
 
-/// Which endpoints of an edge are pinned (never both: such an edge is not evaluated).
+/// Which endpoints of an edge are pinned (never both: such an edge is not evaluated),
+/// and which one the seam rule keeps, if it keeps one.
 #[derive(Debug, Clone, Copy)]
 struct Pinned {
     a: bool,
     b: bool,
+    /// The endpoint that must stay (it may still move) because the seam rule lets only
+    /// the other one go.
+    seam_keeps: Option<u32>,
 }
 
 impl Pinned {
@@ -196,8 +214,9 @@ impl Pinned {
         self.a || self.b
     }
 
-    /// The endpoint a collapse onto an endpoint keeps: the pinned one, else the one with
-    /// the smaller `error_keeping` (the lower index on a tie).
+    /// The endpoint a collapse onto an endpoint keeps: the pinned one, else the one the
+    /// seam rule keeps, else the one with the smaller `error_keeping` (the lower index on
+    /// a tie).
     #[inline]
     fn endpoint(self, a: u32, b: u32, error_keeping: impl Fn(u32) -> f64) -> u32 {
         let (lo, hi) = if a < b { (a, b) } else { (b, a) };
@@ -205,6 +224,8 @@ impl Pinned {
             a
         } else if self.b {
             b
+        } else if let Some(keep) = self.seam_keeps {
+            keep
         } else if error_keeping(hi) < error_keeping(lo) {
             hi
         } else {

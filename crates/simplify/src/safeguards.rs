@@ -1,12 +1,13 @@
 //! The safeguards a collapse must pass before it is performed, all read-only on the
-//! engine: the link condition (no non-manifold edge, no pinched boundary, no
-//! tetrahedral fan), and for every face that survives with a moved corner: no
-//! degeneracy, no normal turned past the limit from before the collapse or from the
+//! engine: the seam rule (a seam vertex goes only along its seam, and no seam loop
+//! shrinks below three edges), the link condition (no non-manifold edge, no pinched
+//! boundary, no tetrahedral fan), and for every face that survives with a moved corner:
+//! no degeneracy, no normal turned past the limit from before the collapse or from the
 //! input, and the fold guard (no normal far from the input normals under its corners).
 
 use desal_mesh::Vec3;
 
-use crate::classify::BOUNDARY;
+use crate::classify::{BOUNDARY, PINNED, SEAM};
 use crate::collapse::{Candidate, Engine};
 use crate::marks::ScratchMarks;
 use crate::report::Refusal;
@@ -19,6 +20,7 @@ impl Engine {
     /// All safeguards for one candidate: the link condition, then the geometry of every
     /// face that survives the collapse. `marks` is scratch.
     pub(crate) fn check_collapse(&self, c: &Candidate, marks: &mut ScratchMarks) -> Result<(), Refusal> {
+        self.check_seam_rule(c.remove, c.keep)?;
         if !self.link_condition_holds(c.remove, c.keep, marks) {
             return Err(Refusal::Topology);
         }
@@ -27,6 +29,48 @@ impl Engine {
             self.check_moved_faces(c.keep, c.remove, &c.position)?;
         }
         Ok(())
+    }
+
+    /// The seam rule, meshoptimizer's `kCanCollapse` for the kinds a seam gives:
+    ///
+    /// | remove \ keep | free | `SEAM` | `PINNED` |
+    /// |---|---|---|---|
+    /// | free | yes | yes | yes |
+    /// | `SEAM` | no | along a seam edge | along a seam edge |
+    /// | `PINNED` | no | no | no |
+    ///
+    /// so a seam stays a polyline of edges and both its sides keep their faces. A `SEAM`
+    /// vertex leaving along its seam must also not fold a seam loop of three edges into
+    /// a doubled edge: its other seam neighbour may not already be a seam neighbour of
+    /// `keep`. Without seams, nothing is refused here.
+    pub(crate) fn check_seam_rule(&self, remove: u32, keep: u32) -> Result<(), Refusal> {
+        let Some(seams) = &self.seams else { return Ok(()) };
+        if !self.seam_rule_lets_remove(remove, keep) {
+            return Err(Refusal::Seam);
+        }
+        if self.flags[remove as usize] & SEAM != 0
+            && seams.of(remove).iter().any(|&other| other != keep && seams.joins(keep, other))
+        {
+            return Err(Refusal::Seam);
+        }
+        Ok(())
+    }
+
+    /// Whether the seam rule's table lets `remove` collapse onto its neighbour `keep`.
+    #[inline]
+    pub(crate) fn seam_rule_lets_remove(&self, remove: u32, keep: u32) -> bool {
+        let flags = self.flags[remove as usize];
+        if flags & PINNED != 0 {
+            return false;
+        }
+        flags & SEAM == 0 || self.seams.as_ref().is_some_and(|s| s.joins(remove, keep))
+    }
+
+    /// Whether edge `(a, b)` may collapse in at least one direction under the seam rule's
+    /// table (the ranking then keeps the endpoint that must stay).
+    #[inline]
+    pub(crate) fn seam_rule_allows_either(&self, a: u32, b: u32) -> bool {
+        self.seam_rule_lets_remove(a, b) || self.seam_rule_lets_remove(b, a)
     }
 
     /// The link condition (Dey et al. 1999) in the form that matters for a 2-manifold
@@ -152,8 +196,8 @@ mod tests {
     }
 
     fn engine_for(mesh: &TriMesh, config: &SimplifyConfig) -> (Engine, ScratchMarks) {
-        let engine =
-            Engine::new(&[mesh.positions.as_slice()], 0, mesh, mesh.faces.clone(), None, None, config);
+        let input = crate::SimplifyInput::new(mesh);
+        let engine = Engine::new(&[mesh.positions.as_slice()], 0, &input, mesh.faces.clone(), config);
         let marks = ScratchMarks::new(mesh.positions.len());
         (engine, marks)
     }
@@ -201,6 +245,31 @@ mod tests {
         let on_line = p3 + (p4 - p3) * 0.5;
         let c = Candidate { remove: 1, keep: 0, position: on_line, error: 0.0, cost: 0.0 };
         assert_eq!(engine.check_collapse(&c, &mut marks), Err(Refusal::Degenerate));
+    }
+
+    /// The seam rule on the flat hexagonal fan with a seam 1–0–4 through the centre:
+    /// the centre (two seam edges, not on the boundary) may go along the seam onto 1 but
+    /// not onto 2; ring vertex 1 ends the seam, so it is locked and the collapse of edge
+    /// (1, 2) must keep it; ring vertex 2 is off the seam and goes anywhere.
+    #[test]
+    fn a_seam_vertex_goes_only_along_its_seam() {
+        let mesh = hexagon_fan();
+        let seams = [[1, 0], [0, 4]];
+        let input = crate::SimplifyInput::new(&mesh).with_seams(&seams);
+        let engine = Engine::new(
+            &[mesh.positions.as_slice()],
+            0,
+            &input,
+            mesh.faces.clone(),
+            &SimplifyConfig::default(),
+        );
+        assert_eq!(engine.check_seam_rule(0, 1), Ok(()));
+        assert_eq!(engine.check_seam_rule(0, 2), Err(Refusal::Seam));
+        assert_eq!(engine.check_seam_rule(1, 2), Err(Refusal::Seam));
+        assert_eq!(engine.check_seam_rule(2, 1), Ok(()));
+        assert_eq!(engine.check_seam_rule(2, 0), Ok(()));
+        let kept = engine.evaluate(1, 2).expect("2 may go onto 1");
+        assert_eq!((kept.remove, kept.keep), (2, 1));
     }
 
     /// The link condition: in a closed octahedron every edge may collapse (apexes keep

@@ -14,12 +14,17 @@ pub struct SimplifyInput<'a> {
     pub weights: Option<&'a [f64]>,
     /// One part id per input vertex, used by [`crate::SimplifyConfig::part_borders`].
     pub part_labels: Option<&'a [u32]>,
+    /// Attribute seams: input edges `[a, b]` (input vertex indices, either order, repeats
+    /// allowed) along which the caller's attributes are split (UV charts, hard normals).
+    /// Each seam survives as a polyline: a seam vertex collapses only along its seam onto
+    /// a seam vertex, and seam ends and junctions are never removed. `None`: no seams.
+    pub seams: Option<&'a [[u32; 2]]>,
 }
 
 impl<'a> SimplifyInput<'a> {
     /// A mesh with no weights and no labels.
     pub fn new(mesh: &'a TriMesh) -> Self {
-        Self { mesh, weights: None, part_labels: None }
+        Self { mesh, weights: None, part_labels: None, seams: None }
     }
 
     /// Adds per-vertex saliency weights.
@@ -30,6 +35,11 @@ impl<'a> SimplifyInput<'a> {
     /// Adds per-vertex part labels.
     pub fn with_part_labels(self, labels: &'a [u32]) -> Self {
         Self { part_labels: Some(labels), ..self }
+    }
+
+    /// Adds attribute seams (see [`SimplifyInput::seams`]).
+    pub fn with_seams(self, seams: &'a [[u32; 2]]) -> Self {
+        Self { seams: Some(seams), ..self }
     }
 }
 

@@ -32,3 +32,29 @@ fn simplify_output_matches_its_golden_hash() {
     }
     assert_golden("stage 3 (simplify)", "desal_simplify::VERSION", hash.finish(), 0x185f914394339187);
 }
+
+/// The same tube with a seam down one column (every ring's vertex 0, end ring to end
+/// ring) and one around its middle ring, in both placements: fails when the seam rules
+/// change the output, naming the `VERSION` to bump.
+#[test]
+fn simplify_with_seams_matches_its_golden_hash() {
+    let (rings, segments) = (16, 12);
+    let mesh = tube(rings, segments);
+    let at = |r: usize, s: usize| (r * segments + s % segments) as u32;
+    let mut seams: Vec<[u32; 2]> = (0..rings - 1).map(|r| [at(r, 0), at(r + 1, 0)]).collect();
+    seams.extend((0..segments).map(|s| [at(rings / 2, s), at(rings / 2, s + 1)]));
+    let mut hash = Fnv::default();
+    for placement in [Placement::Optimal, Placement::Subset] {
+        let config = SimplifyConfig { target: Target::Vertices(60), placement, ..SimplifyConfig::default() };
+        let out = simplify(&SimplifyInput::new(&mesh).with_seams(&seams), &config).unwrap();
+        assert_eq!(out.report.seam_vertices, rings + segments - 1);
+        hash.points(&out.mesh.positions).indices(out.mesh.faces.iter().flatten().copied());
+        hash.indices(out.simp_to_orig.iter().map(|o| o.unwrap_or(u32::MAX)));
+    }
+    assert_golden(
+        "stage 3 (simplify) with seams",
+        "desal_simplify::VERSION",
+        hash.finish(),
+        0x1897dc9adb291d3f,
+    );
+}

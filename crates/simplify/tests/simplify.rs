@@ -589,3 +589,76 @@ fn fold_guard_survey() {
     let count = |deg: f64| flagged_at.iter().find(|(d, _)| *d == deg).unwrap().1;
     assert!(count(70.0) < count(180.0), "the guard must remove folds: {flagged_at:?}");
 }
+
+// ---------------------------------------------------------------------------------
+// Attribute seams.
+// ---------------------------------------------------------------------------------
+
+/// A bumpy 12 × 12 grid with a seam down its middle column (x = 6, boundary to
+/// boundary), simplified to 60 faces with subset placement: the seam survives as a
+/// polyline — both ends (locked: they are on the boundary), and every two consecutive
+/// surviving seam vertices joined by an output edge — and every output face lies on one
+/// side of it. Without the seam, the same simplification crosses that column, so the
+/// checks can fail.
+#[test]
+fn a_seam_survives_as_a_polyline_with_its_vertices_collapsing_only_along_it() {
+    let n = 12;
+    let mesh = grid(n, |i, j| 0.3 * ((i * 7 + j * 3) % 5) as f64 + 0.05 * (i * j % 3) as f64);
+    let column = |j: usize| (j * (n + 1) + n / 2) as u32;
+    let seams: Vec<[u32; 2]> = (0..n).map(|j| [column(j), column(j + 1)]).collect();
+    let config = SimplifyConfig { placement: Placement::Subset, ..SimplifyConfig::qslim(Target::Faces(60)) };
+    let kept_seam = simplify(&SimplifyInput::new(&mesh).with_seams(&seams), &config).unwrap();
+    assert_eq!(kept_seam.report.seam_vertices, n + 1);
+    assert_eq!(kept_seam.report.stop, StopReason::TargetReached);
+    assert_clean_manifold(&kept_seam.mesh);
+    assert_eq!(seam_breaks(&mesh, &kept_seam, n), (0, 0), "{:?}", kept_seam.report);
+
+    let plain = simplify(&SimplifyInput::new(&mesh), &config).unwrap();
+    let (gaps, crossing) = seam_breaks(&mesh, &plain, n);
+    assert!(gaps + crossing > 0, "without seams the grid's middle column is simplified like any other");
+}
+
+/// How a simplification of [`grid`]`(n, _)` broke the seam down column `n / 2`: the
+/// number of missing links (a seam end lost, or two consecutive surviving seam vertices
+/// not joined by an output edge) and the number of output faces with corners on both
+/// sides of the column.
+fn seam_breaks(mesh: &TriMesh, out: &Simplified, n: usize) -> (usize, usize) {
+    let middle = (n / 2) as f64;
+    let orig = out.subset_indices().expect("subset placement");
+    // Surviving seam vertices by row, as simp indices.
+    let mut on_seam: Vec<(f64, u32)> = (0..orig.len())
+        .filter(|&s| mesh.positions[orig[s] as usize].x == middle)
+        .map(|s| (mesh.positions[orig[s] as usize].y, s as u32))
+        .collect();
+    on_seam.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let edges: std::collections::BTreeSet<[u32; 2]> =
+        EdgeTopology::new(&out.mesh.faces).edges.into_iter().collect();
+    let ends_lost = usize::from(on_seam.first().map(|r| r.0) != Some(0.0))
+        + usize::from(on_seam.last().map(|r| r.0) != Some(n as f64));
+    let gaps =
+        on_seam.windows(2).filter(|w| !edges.contains(&[w[0].1.min(w[1].1), w[0].1.max(w[1].1)])).count();
+    let crossing = out
+        .mesh
+        .faces
+        .iter()
+        .filter(|f| {
+            let xs = f.map(|s| out.mesh.positions[s as usize].x);
+            xs.iter().any(|&x| x < middle) && xs.iter().any(|&x| x > middle)
+        })
+        .count();
+    (ends_lost + gaps, crossing)
+}
+
+/// Seams that are not edges of the mesh are refused with their index.
+#[test]
+fn seams_off_the_mesh_are_refused() {
+    let mesh = grid(2, |_, _| 0.0);
+    let config = SimplifyConfig::default();
+    let far = simplify(&SimplifyInput::new(&mesh).with_seams(&[[0, 1], [0, 9]]), &config).unwrap_err();
+    assert_eq!(far, SimplifyError::SeamIndexOutOfRange { seam: 1, vertex: 9, vertex_count: 9 });
+    // Vertices 0 and 8 are opposite corners: no face has both.
+    let apart = simplify(&SimplifyInput::new(&mesh).with_seams(&[[0, 8]]), &config).unwrap_err();
+    assert_eq!(apart, SimplifyError::SeamNotAnEdge { seam: 0, a: 0, b: 8 });
+    let looped = simplify(&SimplifyInput::new(&mesh).with_seams(&[[4, 4]]), &config).unwrap_err();
+    assert_eq!(looped, SimplifyError::SeamNotAnEdge { seam: 0, a: 4, b: 4 });
+}
