@@ -13,5 +13,5 @@ out=$(realpath -m "${1:-/tmp/desal-rig-harness}")
 cargo build --release --locked -q --bin desal
 export DESAL_GLTFPACK="$PWD/tests/gltf/node_modules/.bin/gltfpack"
 target/release/desal eval pipelines/rig-sample.toml --out "$out" --quiet \
-  --methods qslim,paper,multipose,meshopt,meshopt-regularize,gltfpack,gltfpack-sa
+  --methods qslim,paper,desal,multipose,meshopt,meshopt-regularize,gltfpack,gltfpack-sa
 echo "eval.md: $out/rig-sample/eval/eval.md"
