@@ -516,6 +516,7 @@ fn simplify_rig<'py>(
         serde_json::from_value(table).map_err(|e| InputError::new_err(format!("rig: {e}")))?;
     rig.frame_config().map_err(errors::input)?;
     rig.parts_config().map_err(errors::input)?;
+    rig.weight_options().map_err(errors::input)?;
     let (params, multipose) = stage_params(method, fit, saliency, simplify)?;
     let s = detached(py, progress, |p| {
         let s = memory::simplify_rig(&file, &rig, &params, multipose, p).map_err(|e| {
