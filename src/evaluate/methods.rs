@@ -246,17 +246,7 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 balance,
                 ..inputs.base_config.clone()
             };
-            let seams = inputs.seams.as_deref();
-            let out = simplify::compute_with_seams(
-                &config,
-                &template,
-                &inputs.weights,
-                &inputs.labels,
-                seams,
-                &NoProgress,
-            )
-            .with_context(|| format!("{name}: stage 3"))?;
-            (out.body, Some(out.summary.stop), out.note)
+            template_quadrics(inputs, &template, &config).with_context(|| format!("{name}: stage 3"))?
         }
         Method::Desal => {
             let config = SimplifyConfig {
@@ -267,17 +257,7 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 normalized_error: true,
                 ..inputs.base_config.clone()
             };
-            let seams = inputs.seams.as_deref();
-            let out = simplify::compute_with_seams(
-                &config,
-                &template,
-                &inputs.weights,
-                &inputs.labels,
-                seams,
-                &NoProgress,
-            )
-            .with_context(|| format!("{name}: stage 3"))?;
-            (out.body, Some(out.summary.stop), out.note)
+            template_quadrics(inputs, &template, &config).with_context(|| format!("{name}: stage 3"))?
         }
         Method::Multipose(cost) => {
             let (saliency, balance) = cost.switches();
@@ -376,6 +356,19 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
         check_parts(&name, &mapped)?;
     }
     Ok(SimplifiedSet { raw, mapped, stop, note, simplify_seconds, skin })
+}
+
+/// Stage 3 on the template with `config`, the dataset's seams kept: the body, its stop
+/// and its note.
+fn template_quadrics(
+    inputs: &Inputs,
+    template: &TriMesh,
+    config: &SimplifyConfig,
+) -> Result<(desal_io::artifact::SimplifiedV1, Option<StopReason>, String)> {
+    let seams = inputs.seams.as_deref();
+    let out =
+        simplify::compute_with_seams(config, template, &inputs.weights, &inputs.labels, seams, &NoProgress)?;
+    Ok((out.body, Some(out.summary.stop), out.note))
 }
 
 /// The per-part rigid fit the model starts from needs every part to keep at least three
