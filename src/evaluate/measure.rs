@@ -316,7 +316,9 @@ fn pose_errors(
     full: &Target,
 ) -> (PoseErrors, Vec<f64>) {
     let deformed = TriMesh { positions: positions.to_vec(), faces: faces.to_vec() };
-    let deformed_surface = SurfaceIndex::new(&deformed);
+    // The deformation has the simplified target's faces and lies near it: its tree,
+    // refitted, serves as well as a new one.
+    let deformed_surface = simplified.surface.refit(&deformed);
     let (vs_simplified, vertex_errors) = errors(&deformed, &deformed_surface, simplified);
     let (vs_full, _) = errors(&deformed, &deformed_surface, full);
     (PoseErrors { vs_simplified, vs_full }, vertex_errors)

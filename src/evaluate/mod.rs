@@ -460,7 +460,12 @@ fn figure_poses(poses: &PoseSet, evaluated: &[usize], names: &[String]) -> Resul
         .collect()
 }
 
-/// Writes every PNG; returns their paths relative to `dir`.
+/// One PNG to render: its path relative to the eval folder, and how to draw it.
+type Figure<'a> = (String, Box<dyn Fn() -> Result<Vec<u8>> + Send + Sync + 'a>);
+
+/// Writes every PNG; returns their paths relative to `dir`. The pictures are drawn in
+/// parallel (each is independent, so the bytes do not depend on the thread count) and
+/// written in a fixed order.
 fn write_figures(
     dir: &Path,
     dataset: &Dataset,
@@ -474,27 +479,12 @@ fn write_figures(
     let slot = |pose: usize| evaluated.iter().position(|&p| p == pose).expect("figure poses are evaluated");
     let up = crate::pictures::parse_up_axis(dataset.spec.up_axis.as_deref())?;
     let views = Views::of(&poses.template_mesh(), up)?;
-    let mut files = Vec::new();
-    let mut write = |name: String, bytes: Vec<u8>| -> Result<()> {
-        let path = dir.join(&name);
-        std::fs::create_dir_all(path.parent().expect("inside dir"))?;
-        desal_io::write_atomic(&path, &bytes)?;
-        files.push(name);
-        Ok(())
-    };
+    let views = &views;
 
     // Figs. 4–5: face areas of every simplified template, one range for all.
     let templates: Vec<TriMesh> = runs.iter().map(|r| r.set.mapped.poses.template_mesh()).collect();
     let areas: Vec<Vec<f64>> = templates.iter().map(figures::face_areas_cm2).collect();
     let area_range = figures::shared_range(areas.iter().map(Vec::as_slice), 99.0);
-    for (run, template) in runs.iter().zip(&templates) {
-        let name = run.method.name();
-        let title = format!("{name}: face area");
-        write(
-            format!("face-area/{name}.png"),
-            figures::face_area_png(&views, template, &title, area_range)?,
-        )?;
-    }
 
     // Error maps: distance (mm) of each held-out deformed vertex to the simplified
     // ground-truth surface, per figure pose and as the RMS over all poses.
@@ -519,21 +509,6 @@ fn write_figures(
         positions: run.deformed.held_out[pose].clone().expect("evaluated poses are held out"),
         faces: run.set.mapped.poses.faces.clone(),
     };
-    for (m, run) in runs.iter().enumerate() {
-        let name = run.method.name();
-        let first = deformed_mesh(run, shown[0]);
-        let title = format!("{name}: RMS error, all poses (on {})", poses.names[shown[0]]);
-        write(
-            format!("errors/{name}-rms.png"),
-            figures::error_png(&views, &first, &rms_mm[m], &title, error_range)?,
-        )?;
-        for (k, &pose) in shown.iter().enumerate() {
-            let mesh = deformed_mesh(run, pose);
-            let title = format!("{name}: {}", poses.names[pose]);
-            let png = figures::error_png(&views, &mesh, &shown_mm[m][k], &title, error_range)?;
-            write(format!("errors/{name}-{}.png", poses.names[pose]), png)?;
-        }
-    }
 
     // Fig. 7: ground truth and a few methods' held-out deformations side by side.
     let featured: Vec<usize> = {
@@ -564,7 +539,54 @@ fn write_figures(
         });
     }
     let titles: Vec<String> = shown.iter().map(|&p| poses.names[p].clone()).collect();
-    write("deformation.png".into(), figures::deformation_grid_png(&views, &rows, &titles, error_range)?)?;
+
+    // The drawings, in the order the files are listed; they borrow everything above.
+    let mut jobs: Vec<Figure> = Vec::new();
+    for (run, template) in runs.iter().zip(&templates) {
+        let name = run.method.name();
+        let title = format!("{name}: face area");
+        jobs.push((
+            format!("face-area/{name}.png"),
+            Box::new(move || figures::face_area_png(views, template, &title, area_range)),
+        ));
+    }
+    let (rms_mm, shown_mm, deformed_mesh) = (&rms_mm, &shown_mm, &deformed_mesh);
+    for (m, run) in runs.iter().enumerate() {
+        let name = run.method.name();
+        let first = shown[0];
+        let title = format!("{name}: RMS error, all poses (on {})", poses.names[first]);
+        jobs.push((
+            format!("errors/{name}-rms.png"),
+            Box::new(move || {
+                figures::error_png(views, &deformed_mesh(run, first), &rms_mm[m], &title, error_range)
+            }),
+        ));
+        for (k, &pose) in shown.iter().enumerate() {
+            let title = format!("{name}: {}", poses.names[pose]);
+            jobs.push((
+                format!("errors/{name}-{}.png", poses.names[pose]),
+                Box::new(move || {
+                    figures::error_png(views, &deformed_mesh(run, pose), &shown_mm[m][k], &title, error_range)
+                }),
+            ));
+        }
+    }
+    let (rows, titles) = (&rows, &titles);
+    jobs.push((
+        "deformation.png".into(),
+        Box::new(move || figures::deformation_grid_png(views, rows, titles, error_range)),
+    ));
+
+    // Consumed here, so the drawings' borrows end before the data they borrow.
+    let rendered: Vec<(String, Vec<u8>)> =
+        jobs.into_par_iter().map(|(name, draw)| Ok((name, draw()?))).collect::<Result<_>>()?;
+    let mut files = Vec::new();
+    for (name, bytes) in rendered {
+        let path = dir.join(&name);
+        std::fs::create_dir_all(path.parent().expect("inside dir"))?;
+        desal_io::write_atomic(&path, &bytes)?;
+        files.push(name);
+    }
     Ok(files)
 }
 

@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use crate::error::EvalError;
 use crate::folds::{folds, training_poses};
-use crate::metrics::{v2f, v2v};
+use crate::metrics::{SurfaceIndex, v2f_halves_both_indexed, v2v};
 use crate::pose_model::PoseModel;
 use crate::transform::PartTransform;
 
@@ -65,11 +65,17 @@ pub fn model_floor(
     let all: Vec<usize> = (0..poses.pose_count()).collect();
     let in_sample = synthesise(poses, labels, transforms, model, &all, &evaluated)?;
     let test_folds = folds(poses.pose_count(), poses.template, k);
+    // The folds' fits are independent: in parallel, collected in fold order.
+    let fold_poses: Vec<Vec<Vec<Vec3>>> = test_folds
+        .par_iter()
+        .map(|test| {
+            let training = training_poses(poses.pose_count(), test);
+            synthesise(poses, labels, transforms, model, &training, test)
+        })
+        .collect::<Result<_, _>>()?;
     let mut held_out = vec![Vec::new(); poses.pose_count()];
-    for test in &test_folds {
-        let training = training_poses(poses.pose_count(), test);
-        for (&p, positions) in test.iter().zip(synthesise(poses, labels, transforms, model, &training, test)?)
-        {
+    for (test, synthesised) in test_folds.iter().zip(fold_poses) {
+        for (&p, positions) in test.iter().zip(synthesised) {
             held_out[p] = positions;
         }
     }
@@ -106,7 +112,11 @@ fn mean_errors(poses: &PoseSet, evaluated: &[usize], synthesised: &[Vec<Vec3>]) 
         .map(|(&p, positions)| {
             let target = poses.pose_mesh(p);
             let deformed = TriMesh { positions: positions.clone(), faces: poses.faces.clone() };
-            (v2v(&deformed, &target), v2f(&deformed, &target))
+            // `v2f(&deformed, &target)`, with the deformation's index refitted from the
+            // target's (same faces, nearby positions) instead of built.
+            let surface = SurfaceIndex::new(&target);
+            let v2f = v2f_halves_both_indexed(&deformed, &surface.refit(&deformed), &target, &surface);
+            (v2v(&deformed, &target), v2f.combined())
         })
         .collect();
     let n = per_pose.len().max(1) as Real;

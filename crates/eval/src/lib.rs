@@ -41,8 +41,8 @@ pub use floor::{MeanErrors, ModelFloor, model_floor};
 pub use folds::{folds, training_poses};
 pub use lbs::{LbsConfig, LbsModel, LbsReport, fit_lbs};
 pub use metrics::{
-    SurfaceIndex, V2fHalves, VertexErrors, VertexIndex, v2f, v2f_halves, v2f_halves_indexed, v2v,
-    vertex_errors,
+    SurfaceIndex, V2fHalves, VertexErrors, VertexIndex, v2f, v2f_halves, v2f_halves_both_indexed,
+    v2f_halves_indexed, v2v, vertex_errors,
 };
 pub use model::{Anchoring, DEFAULT_ANCHOR_SCALE, Model, ModelConfig, ModelReport, Regression, fit_model};
 pub use poisson::{AnchoredPoissonSolver, PoissonSolver};

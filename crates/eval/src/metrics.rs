@@ -38,6 +38,16 @@ impl SurfaceIndex {
         Self { bvh: Bvh::build(&boxes), triangles }
     }
 
+    /// The index of `mesh`, which has as many faces as the indexed mesh (typically the
+    /// same faces in another pose, or a deformation of them): this index's tree with
+    /// every box recomputed, no build. Same answers as `SurfaceIndex::new(mesh)`, and as
+    /// fast while `mesh` is near the indexed one. Panics on another face count.
+    pub fn refit(&self, mesh: &TriMesh) -> Self {
+        let triangles: Vec<[Vec3; 3]> = (0..mesh.face_count()).map(|f| mesh.corners(f)).collect();
+        let boxes: Vec<Aabb> = triangles.iter().map(|t| Aabb::of_points(t)).collect();
+        Self { bvh: self.bvh.refitted(&boxes), triangles }
+    }
+
     /// Squared distance from `p` to the surface, with the index of a nearest face (the
     /// lowest index among equally near faces); `None` when the surface has no faces.
     pub fn nearest(&self, p: &Vec3) -> Option<(u32, Real)> {
@@ -117,8 +127,20 @@ pub fn v2f_halves(a: &TriMesh, b: &TriMesh) -> V2fHalves {
 /// [`v2f_halves`] with `b`'s surface index built by the caller, for a `b` measured
 /// against many meshes (`b_surface` must index `b`).
 pub fn v2f_halves_indexed(a: &TriMesh, b: &TriMesh, b_surface: &SurfaceIndex) -> V2fHalves {
+    v2f_halves_both_indexed(a, &SurfaceIndex::new(a), b, b_surface)
+}
+
+/// [`v2f_halves`] with both surface indices built by the caller (`a_surface` must index
+/// `a`, `b_surface` `b`; e.g. `a_surface = b_surface.refit(a)` for a deformation `a` of
+/// `b`).
+pub fn v2f_halves_both_indexed(
+    a: &TriMesh,
+    a_surface: &SurfaceIndex,
+    b: &TriMesh,
+    b_surface: &SurfaceIndex,
+) -> V2fHalves {
     let a_to_b = b_surface.distances_sq(&a.positions);
-    let b_to_a = SurfaceIndex::new(a).distances_sq(&b.positions);
+    let b_to_a = a_surface.distances_sq(&b.positions);
     V2fHalves {
         a_to_b: mean(&a_to_b),
         b_to_a: mean(&b_to_a),

@@ -8,7 +8,7 @@
 //! the full faces against the full mesh), both in squared input units (m² for SCAPE).
 //! Measure on poses the upsampler was not fitted on to report it held out.
 
-use desal_eval::{SurfaceIndex, metrics::mean, v2f_halves_indexed};
+use desal_eval::{SurfaceIndex, metrics::mean, v2f_halves_both_indexed};
 use desal_mesh::{PoseSet, Real, TriMesh, Vec3};
 use rayon::prelude::*;
 
@@ -111,8 +111,11 @@ pub fn upsampling_errors(
                     let up = upsample_pose(full, c, slot, pose);
                     let squared = squared_errors(&up, &full.poses[pose]);
                     let v2f = truth_surface.as_ref().map(|surface| {
+                        // The upsampled mesh has the truth's faces and lies near it, so
+                        // the truth's tree refitted serves it as well as a new one.
                         let up_mesh = TriMesh { positions: up, faces: full.faces.clone() };
-                        v2f_halves_indexed(&up_mesh, &truth, surface).combined()
+                        v2f_halves_both_indexed(&up_mesh, &surface.refit(&up_mesh), &truth, surface)
+                            .combined()
                     });
                     (PoseError { pose, mse: mean(&squared), v2f }, squared)
                 })
