@@ -314,13 +314,11 @@ fn load_inputs(dataset: &Dataset, stages: &DatasetStages) -> Result<Inputs> {
         .filter(|&p| p == poses.template || !excluded.contains(&poses.names[p]))
         .collect();
     let rig = stages.rig.as_ref().map(|source| rig::RigModel::load(source, &poses)).transpose()?;
-    let seams = match &stages.rig {
-        Some(source) if dataset.spec.simplify.keeps_seams() => {
-            let input = crate::stages::rig::RigInput { file: &source.file, params: &source.params };
-            Some(crate::stages::seams::rig_seam_edges(&input, poses.vertex_count())?.edges)
-        }
-        _ => None,
-    };
+    // From the rig just loaded (`stages::seams::rig_seam_edges` would read and pose it again).
+    let seams = rig
+        .as_ref()
+        .filter(|_| dataset.spec.simplify.keeps_seams())
+        .map(|r| desal_rig::seam_edges(&r.rig.mesh, &r.posed.weld));
     Ok(Inputs { poses, labels, weights, simplification_poses, base_config, rig, part_fits: true, seams })
 }
 

@@ -127,9 +127,12 @@ impl RigModel {
         let (influences, joints): (&Influences, &[Vec<Mat4>]) = match set.own {
             Some(own) => (&own.influences, &own.joints),
             None => {
-                let joints: Vec<Vec<Mat4>> = training.iter().map(|&p| self.posed.joints[p].clone()).collect();
+                // Subset placement keeps exact weights and reads no targets: none are copied.
+                let fitted_on = if set.subset { &[][..] } else { training };
+                let joints: Vec<Vec<Mat4>> =
+                    fitted_on.iter().map(|&p| self.posed.joints[p].clone()).collect();
                 let positions: Vec<Vec<Vec3>> =
-                    training.iter().map(|&p| self.posed.poses.poses[p].clone()).collect();
+                    fitted_on.iter().map(|&p| self.posed.poses.poses[p].clone()).collect();
                 let targets = desal_rig::PoseTargets { joints: &joints, positions: &positions };
                 let input = SimplifiedInput {
                     positions: set.positions,
