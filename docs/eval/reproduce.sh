@@ -3,7 +3,10 @@
 # every built-in method, MeshLab plain and with saliency (when $DESAL_PYTHON, else python3,
 # has pymeshlab: pip install pymeshlab), CGAL Lindstrom-Turk as the paper's third baseline
 # (when the peers are set up: PEERS_HOME=/tmp/desal-peers bash ../shared/peers/setup.sh),
-# 5 folds, the 1000..6000-vertex sweep, under the deformation model $MODEL (default scape).
+# the methods tried for desal's own and not kept (multipose-saliency, multipose-paper,
+# multipose-normalized), 5 folds, and the 1000..6000-vertex sweep of desal, qslim-optimal,
+# paper-subset, multipose (and meshlab-saliency), under the deformation model $MODEL
+# (default scape).
 # Minutes on 2 cores.
 #
 #   [MODEL=scape|scape-centroid|lbs] bash docs/eval/reproduce.sh [OUT_DIR]   (default: /tmp/desal-eval-scape)
@@ -15,11 +18,12 @@ scape="$repo/../shared/datasets/scape"
 [ -d "$scape" ] || { echo "skipped: SCAPE is not at $scape (research-use data)"; exit 0; }
 cargo build --release --quiet --manifest-path "$repo/Cargo.toml" --bin desal
 mkdir -p "$out"
-methods=all
+methods=all,multipose-saliency,multipose-paper,multipose-normalized
+sweep_methods=desal,qslim-optimal,paper-subset,multipose
 if [ -x "$peers/cgal_simplify" ]; then
   # 4996 faces = 2500 vertices on SCAPE's closed genus-0 template, the methods' target.
   "$peers/cgal_simplify" "$scape/mesh000.ply" "$out/cgal-lt-2500.off" 4996 lt 1 > /dev/null
-  methods="all,external:cgal-lt=$out/cgal-lt-2500.off"
+  methods="$methods,external:cgal-lt=$out/cgal-lt-2500.off"
 else
   echo "note: no CGAL driver at $peers; running without the cgal-lt column" >&2
 fi
@@ -27,18 +31,20 @@ python=${DESAL_PYTHON:-python3}
 if "$python" -c "import pymeshlab" 2>/dev/null; then
   export DESAL_PYTHON="$python"
   methods="$methods,meshlab,meshlab-saliency"
+  sweep_methods="$sweep_methods,meshlab-saliency"
 else
   echo "note: $python has no pymeshlab; running without the meshlab columns" >&2
 fi
 model=${MODEL:-scape}
-"$repo/target/release/desal" eval "$repo/pipelines/scape.toml" --out "$out" --methods "$methods" --model "$model" --sweep --quiet
+"$repo/target/release/desal" eval "$repo/pipelines/scape.toml" --out "$out" --methods "$methods" --model "$model" \
+  --sweep --sweep-methods "$sweep_methods" --quiet
 eval_dir="$out/scape/eval"
 dest="$repo/docs/eval"
 suffix=""; [ "$model" = scape ] || suffix="-$model"
 cp "$eval_dir/eval.md" "$dest/scape-eval$suffix.md"
 cp "$eval_dir/sweep.json" "$dest/scape-sweep$suffix.json"
-for png in sweep.png deformation.png face-area/qslim-optimal.png face-area/paper-optimal.png \
-           errors/qslim-optimal-rms.png errors/paper-optimal-rms.png errors/paper-subset-rms.png; do
+for png in sweep.png deformation.png face-area/qslim-optimal.png face-area/paper-optimal.png face-area/desal.png \
+           errors/qslim-optimal-rms.png errors/paper-optimal-rms.png errors/paper-subset-rms.png errors/desal-rms.png; do
   cp "$eval_dir/$png" "$dest/$(echo "$png" | tr / - | sed "s/\.png$/$suffix.png/")"
 done
 echo "eval.md, eval.json and every figure: $eval_dir; copies in docs/eval/"

@@ -9,6 +9,7 @@
 //! | `desal` | desal's own (issue 17): the template's quadrics, each collapse ranked by its error per unit area (`normalized_error`, meshoptimizer's normalisation), no saliency, no balance (EVAL.md, "desal") | subset |
 //! | `multipose` | Mohr & Gleicher 2003: quadrics summed over all poses, no saliency | subset |
 //! | `multipose-saliency`, `multipose-paper` | the same quadrics, the cost × saliency weight (and × edge length): issue 17's "saliency with multi-pose quadrics", measured worse than `multipose` (EVAL.md); named explicitly, not in `all` | subset |
+//! | `multipose-normalized` | the same quadrics, each collapse ranked by its error per unit area as `desal`'s: measured worse than `desal` in v2v and than `multipose` in v2f (EVAL.md); named explicitly, not in `all` | subset |
 //! | `meshopt`, `meshopt-regularize`, `meshopt-priority` | meshoptimizer in-process (feature `meshopt`, on by default): plain, `Regularize`, the most salient vertices flagged `Priority` (`meshopt.rs`) | subset |
 //! | `meshlab`, `meshlab-saliency` | MeshLab's quadric edge collapse through pymeshlab (`$DESAL_PYTHON` or `python3`): plain, and stage 2's weights as vertex quality (`qualityweight`; `meshlab.rs`); named explicitly, not in `all` | greedy |
 //! | `gltfpack`, `gltfpack-sa` | rig datasets: gltfpack (`$DESAL_GLTFPACK` or `gltfpack`) on the rig file, `-si R -noq` (and `-sa`), its ratio bisected to the vertex target; its own skin is kept (`gltfpack.rs`); named explicitly, not in `all` | greedy (exact: it keeps input vertices) |
@@ -38,8 +39,9 @@ pub enum Method {
     /// desal's own: area-normalised quadric error, subset placement.
     Desal,
     /// Multi-pose QEM (Mohr & Gleicher 2003), subset placement, its cost plain
-    /// (`multipose`) or weighted like stage 3's (`multipose-saliency`, `multipose-paper`).
-    Multipose(Cost),
+    /// (`multipose`), weighted like stage 3's (`multipose-saliency`, `multipose-paper`),
+    /// or per unit area like `desal`'s (`multipose-normalized`, with `Cost::Qslim`).
+    Multipose { cost: Cost, normalized: bool },
     /// meshoptimizer, in-process.
     #[cfg(feature = "meshopt")]
     Meshopt(super::meshopt::Variant),
@@ -82,8 +84,9 @@ impl Method {
         match self {
             Method::Quadric { cost, placement } => format!("{}-{}", cost.name(), placement.name()),
             Method::Desal => "desal".into(),
-            Method::Multipose(Cost::Qslim) => "multipose".into(),
-            Method::Multipose(cost) => format!("multipose-{}", cost.name()),
+            Method::Multipose { cost: Cost::Qslim, normalized: false } => "multipose".into(),
+            Method::Multipose { normalized: true, .. } => "multipose-normalized".into(),
+            Method::Multipose { cost, .. } => format!("multipose-{}", cost.name()),
             #[cfg(feature = "meshopt")]
             Method::Meshopt(variant) => variant.name().into(),
             Method::Meshlab(variant) => variant.name().into(),
@@ -111,12 +114,15 @@ impl Method {
             return Ok(Method::Desal);
         }
         if text == "multipose" {
-            return Ok(Method::Multipose(Cost::Qslim));
+            return Ok(Method::Multipose { cost: Cost::Qslim, normalized: false });
+        }
+        if text == "multipose-normalized" {
+            return Ok(Method::Multipose { cost: Cost::Qslim, normalized: true });
         }
         if let Some(cost) = text.strip_prefix("multipose-") {
             let cost: Cost = cost.parse().map_err(|_| anyhow::anyhow!(unknown(text)))?;
             if matches!(cost, Cost::Saliency | Cost::Paper) {
-                return Ok(Method::Multipose(cost));
+                return Ok(Method::Multipose { cost, normalized: false });
             }
         }
         if let Some(variant) = super::meshlab::Variant::ALL.into_iter().find(|v| v.name() == text) {
@@ -164,7 +170,7 @@ impl Method {
     pub fn placement(&self) -> &'static str {
         match self {
             Method::Quadric { placement, .. } => placement.name(),
-            Method::Desal | Method::Multipose(_) => "subset",
+            Method::Desal | Method::Multipose { .. } => "subset",
             #[cfg(feature = "meshopt")]
             Method::Meshopt(_) => "subset",
             Method::Meshlab(_) => "optimal",
@@ -259,9 +265,15 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
             };
             template_quadrics(inputs, &template, &config).with_context(|| format!("{name}: stage 3"))?
         }
-        Method::Multipose(cost) => {
+        Method::Multipose { cost, normalized } => {
             let (saliency, balance) = cost.switches();
-            let config = SimplifyConfig { target, saliency, balance, ..inputs.base_config.clone() };
+            let config = SimplifyConfig {
+                target,
+                saliency,
+                balance,
+                normalized_error: *normalized,
+                ..inputs.base_config.clone()
+            };
             let poses = &inputs.poses;
             let seen = &inputs.simplification_poses;
             // A copy of the pose set only when `[saliency] exclude` hides some poses.

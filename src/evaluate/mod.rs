@@ -94,10 +94,13 @@ pub struct EvalArgs {
     /// eval/deformed/<method>/{in-sample,held-out,ground-truth}/<pose>.ply.
     #[arg(long)]
     pub save_deformed: bool,
-    /// Also evaluate qslim-optimal, paper-optimal and multipose at the --sweep-vertices
-    /// counts: sweep.json and sweep.png.
+    /// Also evaluate the --sweep-methods at the --sweep-vertices counts: sweep.json,
+    /// sweep.png and eval.md's sweep table.
     #[arg(long)]
     pub sweep: bool,
+    /// Methods of the sweep, as in --methods (meshlab-saliency needs $DESAL_PYTHON).
+    #[arg(long, value_delimiter = ',', default_value = sweep::SWEEP_METHODS)]
+    pub sweep_methods: Vec<String>,
     /// Vertex counts of the sweep.
     #[arg(long, value_delimiter = ',', default_value = "1000,2000,3000,4000,5000,6000")]
     pub sweep_vertices: Vec<usize>,
@@ -114,6 +117,18 @@ pub struct EvalArgs {
 /// dataset's results went.
 pub fn eval(args: &EvalArgs) -> Result<()> {
     let methods = Method::parse_list(&args.methods)?;
+    let sweep_methods = if args.sweep {
+        let sweep_methods = Method::parse_list(&args.sweep_methods).context("--sweep-methods")?;
+        if let Some(m) = sweep_methods.iter().find(|m| matches!(m, Method::External { .. })) {
+            bail!(
+                "--sweep-methods: '{}' is another tool's mesh at one vertex count; it cannot be swept",
+                m.name()
+            );
+        }
+        sweep_methods
+    } else {
+        Vec::new()
+    };
     model::check(args.model.as_deref())?;
     if let Some(b) = &args.baseline
         && !methods.iter().any(|m| m.name() == *b)
@@ -142,7 +157,7 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
     let runs = crate::run::run_with_stages(&pipeline, &options).context("running the pipeline's stages")?;
     for DatasetRun { dataset, stages, .. } in &runs {
         let dataset = &pipeline.datasets[*dataset];
-        let dir = evaluate_dataset(&pipeline, dataset, stages, &methods, args)
+        let dir = evaluate_dataset(&pipeline, dataset, stages, &methods, &sweep_methods, args)
             .with_context(|| format!("evaluating dataset '{}'", dataset.spec.name))?;
         println!("{}: {}", dataset.spec.name, dir.join("eval.md").display());
     }
@@ -164,6 +179,7 @@ fn evaluate_dataset(
     dataset: &Dataset,
     stages: &DatasetStages,
     methods: &[Method],
+    sweep_methods: &[Method],
     args: &EvalArgs,
 ) -> Result<PathBuf> {
     let started = Instant::now();
@@ -282,15 +298,28 @@ fn evaluate_dataset(
             save_deformed(dir, poses, &evaluated, &runs)?;
             files.push("deformed/<method>/{in-sample,held-out,ground-truth}/<pose>.ply".into());
         }
+        let mut sweep_md = String::new();
         if args.sweep {
-            let points = sweep::run_sweep(&inputs, &args.sweep_vertices, &folds, &evaluated, &model, &log);
+            let sweep_baseline = sweep::baseline(sweep_methods, &baseline);
+            let points = sweep::run_sweep(
+                &inputs,
+                sweep_methods,
+                &sweep_baseline,
+                &args.sweep_vertices,
+                &folds,
+                &evaluated,
+                &model,
+                &log,
+            );
             desal_io::write_json(&dir.join("sweep.json"), &points)?;
             desal_io::write_atomic(&dir.join("sweep.png"), &figures::sweep_png(&sweep::panels(&points))?)?;
             files.extend(["sweep.json".into(), "sweep.png".into()]);
+            sweep_md = sweep::markdown(&points, &sweep_baseline);
         }
         report.total_seconds = started.elapsed().as_secs_f64();
         desal_io::write_json(&dir.join("eval.json"), &report)?;
-        desal_io::write_atomic(&dir.join("eval.md"), report::markdown(&report, &files).as_bytes())?;
+        let md = report::markdown(&report, &files) + &sweep_md;
+        desal_io::write_atomic(&dir.join("eval.md"), md.as_bytes())?;
         Ok(())
     })?;
     Ok(eval_dir)

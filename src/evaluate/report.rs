@@ -225,28 +225,36 @@ pub fn summarise(in_sample: &[PoseErrors], held_out: &[PoseErrors]) -> Summary {
 
 /// A method's per-pose records against the baseline's (same poses, same order).
 pub fn versus(method: &[PoseRecord], baseline: &[PoseRecord]) -> Versus {
-    let split = |pick: fn(&PoseRecord) -> PoseErrors| {
-        let change = |gt: fn(&PoseErrors) -> Errors| {
-            let ours: Vec<Errors> = method.iter().map(|p| gt(&pick(p))).collect();
-            let base: Vec<Errors> = baseline.iter().map(|p| gt(&pick(p))).collect();
-            let mean = |v: &[Errors], f: fn(&Errors) -> f64| v.iter().map(f).sum::<f64>() / v.len() as f64;
-            let percent = |f: fn(&Errors) -> f64| 100.0 * (mean(&ours, f) / mean(&base, f) - 1.0);
-            let wins = |f: fn(&Errors) -> f64| ours.iter().zip(&base).filter(|(o, b)| f(o) < f(b)).count();
-            let differing =
-                |f: fn(&Errors) -> f64| ours.iter().zip(&base).filter(|(o, b)| f(o) != f(b)).count();
-            let p = |f: fn(&Errors) -> f64| sign_test(wins(f), differing(f));
-            Change {
-                v2f_percent: percent(|e| e.v2f),
-                v2v_percent: percent(|e| e.v2v),
-                v2f_wins: wins(|e| e.v2f),
-                v2v_wins: wins(|e| e.v2v),
-                v2f_p: p(|e| e.v2f),
-                v2v_p: p(|e| e.v2v),
-            }
-        };
-        SplitVersus { vs_simplified: change(|p| p.vs_simplified), vs_full: change(|p| p.vs_full) }
+    let errors = |records: &[PoseRecord], pick: fn(&PoseRecord) -> PoseErrors| -> Vec<PoseErrors> {
+        records.iter().map(pick).collect()
     };
-    Versus { in_sample: split(|p| p.in_sample), held_out: split(|p| p.held_out) }
+    Versus {
+        in_sample: versus_split(&errors(method, |p| p.in_sample), &errors(baseline, |p| p.in_sample)),
+        held_out: versus_split(&errors(method, |p| p.held_out), &errors(baseline, |p| p.held_out)),
+    }
+}
+
+/// One split's per-pose errors (in-sample or held-out) against the baseline's (same
+/// poses, same order): the relative change of the means, the poses won, the sign test.
+pub fn versus_split(ours: &[PoseErrors], base: &[PoseErrors]) -> SplitVersus {
+    let change = |gt: fn(&PoseErrors) -> Errors| {
+        let ours: Vec<Errors> = ours.iter().map(gt).collect();
+        let base: Vec<Errors> = base.iter().map(gt).collect();
+        let mean = |v: &[Errors], f: fn(&Errors) -> f64| v.iter().map(f).sum::<f64>() / v.len() as f64;
+        let percent = |f: fn(&Errors) -> f64| 100.0 * (mean(&ours, f) / mean(&base, f) - 1.0);
+        let wins = |f: fn(&Errors) -> f64| ours.iter().zip(&base).filter(|(o, b)| f(o) < f(b)).count();
+        let differing = |f: fn(&Errors) -> f64| ours.iter().zip(&base).filter(|(o, b)| f(o) != f(b)).count();
+        let p = |f: fn(&Errors) -> f64| sign_test(wins(f), differing(f));
+        Change {
+            v2f_percent: percent(|e| e.v2f),
+            v2v_percent: percent(|e| e.v2v),
+            v2f_wins: wins(|e| e.v2f),
+            v2v_wins: wins(|e| e.v2v),
+            v2f_p: p(|e| e.v2f),
+            v2v_p: p(|e| e.v2v),
+        }
+    };
+    SplitVersus { vs_simplified: change(|p| p.vs_simplified), vs_full: change(|p| p.vs_full) }
 }
 
 /// One line on a `desal eval --model` name, for `eval.md`.

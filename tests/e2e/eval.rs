@@ -339,6 +339,49 @@ fn the_deformation_model_is_chosen_by_name_and_recorded() {
     assert!(lbs > 0.0 && (lbs / anchored - 1.0).abs() > 1e-3, "lbs {lbs:e} vs scape {anchored:e} m²");
 }
 
+/// Issue 17: `--sweep` runs the `--sweep-methods` at every count, and at the main
+/// target its figures and its comparison with the baseline are the main table's (the
+/// same simplification, model and poses); eval.md gets the sweep's table.
+#[test]
+fn the_sweep_at_the_main_target_repeats_the_main_tables_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = sample_pipeline(dir.path(), &data_samples().join("poses"), SAMPLE_TARGET);
+    let counts = format!("600,{SAMPLE_TARGET}");
+    let report = eval_ok(
+        &pipeline,
+        "qslim-optimal,desal",
+        &["--no-floor", "--sweep", "--sweep-methods", "desal,qslim-optimal", "--sweep-vertices", &counts],
+    );
+    let eval_dir = dir.path().join("out/sample/eval");
+    let sweep: Value = serde_json::from_slice(&std::fs::read(eval_dir.join("sweep.json")).unwrap()).unwrap();
+    let points = sweep.as_array().unwrap();
+    assert_eq!(points.len(), 4, "two methods at two counts");
+    let point = |name: &str, count: usize| {
+        points
+            .iter()
+            .find(|p| p["method"] == name && p["target_vertices"] == count)
+            .unwrap_or_else(|| panic!("{name}"))
+    };
+    assert!(point("qslim-optimal", 600)["versus"].is_null(), "the baseline is not compared with itself");
+    let swept = point("desal", SAMPLE_TARGET);
+    let main = method(&report, "desal");
+    assert_eq!(swept["summary"], main["summary"]);
+    assert_eq!(swept["versus"], main["versus_baseline"]);
+    assert!(f(&point("desal", 600)["vertices"]) < f(&swept["vertices"]));
+    let md = std::fs::read_to_string(eval_dir.join("eval.md")).unwrap();
+    assert!(
+        md.contains("## Error vs vertex count") && md.contains("| target | desal | qslim-optimal |"),
+        "{md}"
+    );
+
+    // Another tool's mesh has one vertex count: it cannot be swept.
+    let template = data_samples().join("poses/00_rest.ply");
+    let external = format!("external:x={}", template.display());
+    let out = desal_eval(&[pipeline.to_str().unwrap(), "--sweep", "--sweep-methods", &external, "--quiet"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("'x' is another tool's mesh"), "{}", stderr(&out));
+}
+
 #[test]
 fn bad_requests_fail_with_a_clear_message_and_leave_no_eval_folder() {
     let dir = tempfile::tempdir().unwrap();
