@@ -652,8 +652,12 @@ fn nth_smallest_cost(ranked: &EdgeCosts, n: usize) -> f64 {
     }
     let mut keys: Vec<u64> = Vec::with_capacity(counts[target]);
     for c in &ranked.chunks {
+        // Each key computed once, its bucket read off it.
         keys.extend(
-            c.costs.iter().filter(|&&cost| bucket(cost) == target).map(|&cost| total_order_key(cost)),
+            c.costs
+                .iter()
+                .map(|&cost| total_order_key(cost))
+                .filter(|&key| (key >> (64 - BUCKET_BITS)) as usize == target),
         );
     }
     let (_, &mut nth, _) = keys.select_nth_unstable(n - below);
