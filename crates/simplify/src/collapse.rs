@@ -464,11 +464,13 @@ impl Engine {
                     }
                     self.changed_in_pass[a as usize] = self.pass;
                     self.changed_in_pass[b as usize] = self.pass;
-                    chosen.push([a, b]);
+                    chosen.push(u64::from(a) << 32 | u64::from(b));
                 }
-                // `(lo, hi)` order: vertex order.
+                // `(lo, hi)` order: vertex order. Packed into one integer, which orders
+                // like the pair and compares in one instruction where a pair takes a
+                // lexicographic loop.
                 chosen.sort_unstable();
-                for [a, b] in chosen {
+                for [a, b] in chosen.into_iter().map(|packed| [(packed >> 32) as u32, packed as u32]) {
                     if target.reached(self) {
                         break;
                     }
@@ -650,8 +652,12 @@ fn nth_smallest_cost(ranked: &EdgeCosts, n: usize) -> f64 {
     }
     let mut keys: Vec<u64> = Vec::with_capacity(counts[target]);
     for c in &ranked.chunks {
+        // Each key computed once, its bucket read off it.
         keys.extend(
-            c.costs.iter().filter(|&&cost| bucket(cost) == target).map(|&cost| total_order_key(cost)),
+            c.costs
+                .iter()
+                .map(|&cost| total_order_key(cost))
+                .filter(|&key| (key >> (64 - BUCKET_BITS)) as usize == target),
         );
     }
     let (_, &mut nth, _) = keys.select_nth_unstable(n - below);
