@@ -17,6 +17,7 @@ use desal::stages::saliency::SaliencyParams;
 use desal::stages::simplify::{self as simplify_stage, Cost, SimplifyParams};
 use desal_io::artifact::{FitV1, SaliencyV1, SimplifiedV1};
 use desal_mesh::{PartLabels, PoseSet, TriMesh};
+use desal_simplify::Placement;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use serde::de::DeserializeOwned;
@@ -432,11 +433,19 @@ fn stage_params(
         simplify: params("simplify", simplify)?,
     };
     let multipose = method == "multipose";
-    if !multipose {
+    if method == "desal" {
+        // desal's own method (docs/eval/desal-method.md): the per-area quadric error,
+        // subset placement, no saliency; as `desal eval --methods desal` runs it.
+        (p.simplify.saliency, p.simplify.balance) = (false, false);
+        p.simplify.placement = Placement::Subset;
+        p.simplify.normalized_error = true;
+    } else if !multipose {
         let cost: Cost = method.parse().map_err(|e| {
             bad(
                 "method",
-                format!("{e}: use \"paper\", \"qslim\", \"saliency\", \"balance\" or \"multipose\""),
+                format!(
+                    "{e}: use \"paper\", \"qslim\", \"saliency\", \"balance\", \"multipose\" or \"desal\""
+                ),
             )
         })?;
         (p.simplify.saliency, p.simplify.balance) = cost.switches();

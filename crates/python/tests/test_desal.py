@@ -68,6 +68,21 @@ def test_simplify_pose_set_is_the_cli_exactly(simplified, cli):
     np.testing.assert_array_equal(simplified.simplified_vertices, stage3["positions"])
 
 
+def test_the_desal_method_is_its_settings_by_name(pose_set):
+    # method="desal" (docs/eval/desal-method.md) is QSlim with subset placement and the
+    # per-area error, whatever `placement` says; the per-area error changes the result.
+    ours = desal.simplify_pose_set(pose_set, target_vertices=1500, method="desal")
+    spelled = desal.simplify_pose_set(
+        pose_set, target_vertices=1500, method="qslim", placement="subset", simplify_options={"normalized_error": True}
+    )
+    np.testing.assert_array_equal(ours.vertex_map, spelled.vertex_map)
+    np.testing.assert_array_equal(ours.faces, spelled.faces)
+    template = pose_set.poses[TEMPLATE]
+    np.testing.assert_array_equal(ours.simplified_vertices, template[ours.vertex_map])
+    plain = desal.simplify_pose_set(pose_set, target_vertices=1500, method="qslim", placement="subset")
+    assert not np.array_equal(np.sort(plain.vertex_map), np.sort(ours.vertex_map))
+
+
 def test_stage_by_stage_is_the_pipeline(pose_set, simplified):
     fit = desal.fit(pose_set)
     assert fit.rotations.shape == (11, 16, 3, 3) and fit.translations.shape == (11, 16, 3)

@@ -215,8 +215,10 @@ def simplify_pose_set(
 
     ``poses`` is a :class:`PoseSet`, or (P, V, 3) arrays with ``faces`` (F, 3) and
     ``labels`` (V,) (None: parts discovered from the poses). ``method`` is ``"paper"``
-    (saliency and balance), ``"qslim"``, ``"saliency"``, ``"balance"`` or
-    ``"multipose"`` (multi-pose QEM, subset placement). ``saliency_options`` and
+    (saliency and balance), ``"qslim"``, ``"saliency"``, ``"balance"``,
+    ``"multipose"`` (multi-pose QEM, subset placement) or ``"desal"`` (desal's own:
+    the per-area quadric error, subset placement, no saliency; ``placement`` is
+    ignored; docs/eval/desal-method.md). ``saliency_options`` and
     ``simplify_options`` take the keys of a pipeline file's ``[dataset.saliency]`` and
     ``[dataset.simplify]`` tables.
     """
