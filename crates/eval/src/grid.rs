@@ -106,7 +106,8 @@ impl Grid {
 
     /// The cell index of coordinate `x` along `axis`: monotone in `x`, clamped to the grid.
     fn cell_of(&self, x: Real, axis: usize) -> usize {
-        let t = ((x - self.origin[axis]) * self.inv_cell).floor();
+        let t = (x - self.origin[axis]) * self.inv_cell;
+        // For t > 0 the cast truncates, which is the floor (and no libm call).
         if t <= 0.0 { 0 } else { (t as usize).min(self.dims[axis] - 1) }
     }
 
@@ -145,7 +146,7 @@ impl Grid {
         let scan = |c: usize, best: &mut (u32, Real)| {
             let (start, end) = (self.starts[c] as usize, self.starts[c + 1] as usize);
             for k in start..end {
-                let box_d = self.entry_boxes[k].distance_sq(p);
+                let box_d = box_distance_sq(&self.entry_boxes[k], p);
                 // Strictly farther than the best: it can neither win nor tie.
                 if box_d > best.1 {
                     continue;
@@ -199,6 +200,16 @@ impl Grid {
         }
         Ok(best)
     }
+}
+
+/// `Aabb::distance_sq` written out per coordinate (the scan's inner loop): the same
+/// value bit for bit (each axis's gap, squared and summed x, y, z), so for a point box
+/// it is the exact squared distance to the point.
+#[inline]
+fn box_distance_sq(b: &Aabb, p: &Vec3) -> Real {
+    let gap = |a: usize| (b.lo[a] - p[a]).max(p[a] - b.hi[a]).max(0.0);
+    let (x, y, z) = (gap(0), gap(1), gap(2));
+    x * x + y * y + z * z
 }
 
 #[cfg(test)]

@@ -93,17 +93,27 @@ impl SurfaceIndex {
         points
             .par_iter()
             .zip(seeds)
-            .map(|(p, &s)| self.nearest_seeded(p, s).map_or(Real::INFINITY, |(_, d)| d))
+            .map(|(p, &s)| {
+                // A point on its seed face (a vertex the upsampler kept in place) is at
+                // distance 0, which nothing beats: no search, the same distance.
+                if let Some([a, b, c]) = self.triangles.get(s as usize)
+                    && point_triangle_distance_sq(p, a, b, c) == 0.0
+                {
+                    return 0.0;
+                }
+                self.nearest_seeded(p, s).map_or(Real::INFINITY, |(_, d)| d)
+            })
             .collect()
     }
 }
 
-/// The grid of a triangle surface: cells about twice the mean triangle's largest box
+/// The grid of a triangle surface: cells 1.5 times the mean triangle's largest box
 /// side, so a seeded query near the surface visits one to a few cells of a few dozen
-/// triangles.
+/// triangles (1, 2 and 3 times took 3 %, 4 % and 22 % more instructions on a SCAPE
+/// pose, under cachegrind).
 fn surface_grid(boxes: &[Aabb]) -> Option<Grid> {
     let mean_side = boxes.iter().map(|b| (b.hi - b.lo).max()).sum::<Real>() / boxes.len().max(1) as Real;
-    Grid::build(boxes, 2.0 * mean_side)
+    Grid::build(boxes, 1.5 * mean_side)
 }
 
 /// For each of the `vertex_count` vertices, the lowest-index face of `faces` using it
