@@ -17,6 +17,7 @@
 //! once per method, and stage 2's saliency (and `multipose`'s quadrics) saw every pose;
 //! `docs/eval/blind-saliency.sh` measures what that is worth (EVAL.md).
 
+use std::borrow::Cow;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
@@ -220,25 +221,46 @@ pub struct PoseErrors {
 }
 
 /// A target mesh with its search structures, built once and queried by every method.
-struct Target {
+struct Target<'a> {
     mesh: TriMesh,
-    surface: SurfaceIndex,
+    surface: Cow<'a, SurfaceIndex>,
     vertices: VertexIndex,
 }
 
-impl Target {
+impl<'a> Target<'a> {
     fn new(mesh: TriMesh) -> Self {
-        Self { surface: SurfaceIndex::new(&mesh), vertices: VertexIndex::new(&mesh.positions), mesh }
+        let surface = SurfaceIndex::new(&mesh);
+        Self::with_surface(mesh, Cow::Owned(surface))
     }
+
+    fn with_surface(mesh: TriMesh, surface: Cow<'a, SurfaceIndex>) -> Self {
+        Self { vertices: VertexIndex::new(&mesh.positions), surface, mesh }
+    }
+}
+
+/// Where each query of [`errors`] starts (see `SurfaceIndex::nearest_seeded`): any
+/// seeds give the same errors, near ones give them faster.
+struct Seeds<'a> {
+    /// Per deformed vertex, a target face near it.
+    to_surface: &'a [u32],
+    /// Per target vertex, a deformed face near it.
+    back: &'a [u32],
+    /// Per deformed vertex, a target vertex near it.
+    to_vertex: &'a [u32],
 }
 
 /// Errors of `deformed` (with its surface index) against `target`, and the per-vertex
 /// squared distances of `deformed` to the target surface. Computed exactly as
-/// `desal_eval::v2f` and `desal_eval::v2v` compute them, so that re-measuring saved
-/// meshes reproduces the figures.
-fn errors(deformed: &TriMesh, deformed_surface: &SurfaceIndex, target: &Target) -> (Errors, Vec<f64>) {
-    let to_surface = target.surface.distances_sq(&deformed.positions);
-    let back = deformed_surface.distances_sq(&target.mesh.positions);
+/// `desal_eval::v2f` and `desal_eval::v2v` compute them (the same distances, found from
+/// `seeds`), so that re-measuring saved meshes reproduces the figures.
+fn errors(
+    deformed: &TriMesh,
+    deformed_surface: &SurfaceIndex,
+    target: &Target,
+    seeds: &Seeds,
+) -> (Errors, Vec<f64>) {
+    let to_surface = target.surface.distances_sq_seeded(&deformed.positions, seeds.to_surface);
+    let back = deformed_surface.distances_sq_seeded(&target.mesh.positions, seeds.back);
     let halves = V2fHalves {
         a_to_b: mean(&to_surface),
         b_to_a: mean(&back),
@@ -247,7 +269,7 @@ fn errors(deformed: &TriMesh, deformed_surface: &SurfaceIndex, target: &Target) 
     };
     let errors = Errors {
         v2f: halves.combined(),
-        v2v: mean(&target.vertices.distances_sq(&deformed.positions)),
+        v2v: mean(&target.vertices.distances_sq_seeded(&deformed.positions, seeds.to_vertex)),
         v2f_deformed_to_target: halves.a_to_b,
         v2f_target_to_deformed: halves.b_to_a,
     };
@@ -272,24 +294,98 @@ pub struct Run<'a> {
     pub deformed: &'a Deformed,
 }
 
+/// Per method, where [`errors`]' queries start: a deformed pose lies near its
+/// simplified truth vertex for vertex, and both near the full pose where the templates
+/// are near each other.
+struct RunSeeds {
+    /// Per simplified vertex, a simplified face of it.
+    coarse_faces: Vec<u32>,
+    /// Per simplified vertex, itself.
+    coarse_vertices: Vec<u32>,
+    /// Per simplified vertex, the full face nearest to it in the templates.
+    full_faces: Vec<u32>,
+    /// Per simplified vertex, the full vertex nearest to it in the templates.
+    full_vertices: Vec<u32>,
+    /// Per full vertex, the simplified face nearest to it in the templates.
+    full_to_coarse_faces: Vec<u32>,
+}
+
+impl RunSeeds {
+    fn new(full: &PoseSet, full_template: &Target, run: &Run) -> Self {
+        let coarse = run.simplified;
+        let template = coarse.template_mesh();
+        let coarse_surface = SurfaceIndex::new(&template);
+        let nearest = |found: Option<(u32, f64)>| found.map_or(u32::MAX, |(i, _)| i);
+        Self {
+            coarse_faces: desal_eval::vertex_faces(&coarse.faces, coarse.vertex_count()),
+            coarse_vertices: (0..coarse.vertex_count() as u32).collect(),
+            full_faces: template
+                .positions
+                .par_iter()
+                .map(|p| nearest(full_template.surface.nearest(p)))
+                .collect(),
+            full_vertices: template
+                .positions
+                .par_iter()
+                .map(|p| nearest(full_template.vertices.nearest(p)))
+                .collect(),
+            full_to_coarse_faces: full.poses[full.template]
+                .par_iter()
+                .map(|p| nearest(coarse_surface.nearest(p)))
+                .collect(),
+        }
+    }
+
+    /// Against the method's simplified pose.
+    fn vs_simplified(&self) -> Seeds<'_> {
+        Seeds { to_surface: &self.coarse_faces, back: &self.coarse_faces, to_vertex: &self.coarse_vertices }
+    }
+
+    /// Against the full-resolution pose.
+    fn vs_full(&self) -> Seeds<'_> {
+        Seeds {
+            to_surface: &self.full_faces,
+            back: &self.full_to_coarse_faces,
+            to_vertex: &self.full_vertices,
+        }
+    }
+}
+
 /// Measures every method's deformed poses `evaluated` (none of them the template)
 /// against the simplified and full ground truths. Returns one [`Measured`] per run.
 pub fn measure(full: &PoseSet, evaluated: &[usize], runs: &[Run]) -> Vec<Measured> {
+    measure_indexed(full, evaluated, runs, None)
+}
+
+/// [`measure`], with `full_surfaces[pose]`, when given, indexing `full.pose_mesh(pose)`
+/// (built once by the caller for every measure of the run): the same results.
+pub fn measure_indexed(
+    full: &PoseSet,
+    evaluated: &[usize],
+    runs: &[Run],
+    full_surfaces: Option<&[SurfaceIndex]>,
+) -> Vec<Measured> {
     type PoseResult = Vec<(PoseErrors, PoseErrors, Vec<f64>)>;
+    let full_template = Target::new(full.template_mesh());
+    let seeds: Vec<RunSeeds> = runs.iter().map(|run| RunSeeds::new(full, &full_template, run)).collect();
     let per_pose: Vec<PoseResult> = evaluated
         .par_iter()
         .map(|&pose| {
-            let full_target = Target::new(full.pose_mesh(pose));
+            let full_target = match full_surfaces {
+                Some(s) => Target::with_surface(full.pose_mesh(pose), Cow::Borrowed(&s[pose])),
+                None => Target::new(full.pose_mesh(pose)),
+            };
             runs.iter()
-                .map(|run| {
+                .zip(&seeds)
+                .map(|(run, seeds)| {
                     let simplified_target = Target::new(run.simplified.pose_mesh(pose));
                     let faces = &run.simplified.faces;
                     let held_out =
                         run.deformed.held_out[pose].as_ref().expect("evaluated poses are held out once");
-                    let (in_sample, _) =
-                        pose_errors(&run.deformed.in_sample[pose], faces, &simplified_target, &full_target);
-                    let (held_out, vertex_errors) =
-                        pose_errors(held_out, faces, &simplified_target, &full_target);
+                    let targets = (&simplified_target, &full_target);
+                    let seeds = (seeds.vs_simplified(), seeds.vs_full());
+                    let (in_sample, _) = pose_errors(&run.deformed.in_sample[pose], faces, targets, &seeds);
+                    let (held_out, vertex_errors) = pose_errors(held_out, faces, targets, &seeds);
                     (in_sample, held_out, vertex_errors)
                 })
                 .collect()
@@ -307,20 +403,20 @@ pub fn measure(full: &PoseSet, evaluated: &[usize], runs: &[Run]) -> Vec<Measure
     measured
 }
 
-/// Both ground truths for one deformed pose; also the per-vertex squared distances to
-/// the simplified surface.
+/// Both ground truths `(simplified, full)` for one deformed pose, with their seeds;
+/// also the per-vertex squared distances to the simplified surface.
 fn pose_errors(
     positions: &[Vec3],
     faces: &[Face],
-    simplified: &Target,
-    full: &Target,
+    (simplified, full): (&Target, &Target),
+    (simplified_seeds, full_seeds): &(Seeds, Seeds),
 ) -> (PoseErrors, Vec<f64>) {
     let deformed = TriMesh { positions: positions.to_vec(), faces: faces.to_vec() };
     // The deformation has the simplified target's faces and lies near it: its tree,
     // refitted, serves as well as a new one.
     let deformed_surface = simplified.surface.refit(&deformed);
-    let (vs_simplified, vertex_errors) = errors(&deformed, &deformed_surface, simplified);
-    let (vs_full, _) = errors(&deformed, &deformed_surface, full);
+    let (vs_simplified, vertex_errors) = errors(&deformed, &deformed_surface, simplified, simplified_seeds);
+    let (vs_full, _) = errors(&deformed, &deformed_surface, full, full_seeds);
     (PoseErrors { vs_simplified, vs_full }, vertex_errors)
 }
 
@@ -371,7 +467,10 @@ mod tests {
             ],
             faces: vec![[0, 1, 4], [1, 3, 4], [3, 2, 4], [2, 0, 4]],
         };
-        let (e, per_vertex) = errors(&a, &SurfaceIndex::new(&a), &Target::new(b.clone()));
+        // Arbitrary seeds (in range or not): the same errors.
+        let seeds =
+            Seeds { to_surface: &[3, 0, 1, 2], back: &[1, 0, 9, 1, 0], to_vertex: &[4, 4, 0, u32::MAX] };
+        let (e, per_vertex) = errors(&a, &SurfaceIndex::new(&a), &Target::new(b.clone()), &seeds);
         assert_eq!(e.v2f, desal_eval::v2f(&a, &b));
         assert_eq!(e.v2v, desal_eval::v2v(&a, &b));
         assert_eq!(mean(&per_vertex), e.v2f_deformed_to_target);

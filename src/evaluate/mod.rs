@@ -36,6 +36,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use desal_eval::SurfaceIndex;
 use desal_io::ply::{PlyWriteOptions, write_ply};
 use desal_mesh::{PoseSet, TriMesh, Vec3};
 use desal_simplify::Target;
@@ -208,6 +209,10 @@ fn evaluate_dataset(
     // Step 2: simplify, map and deform, one method at a time (each runs in parallel);
     // then the upsampling error of the simplified mesh and of its deformations.
     let fitted = crate::stages::hierarchy::measured_fitted(dataset.spec.hierarchy.as_ref())?;
+    // Every full-resolution pose's surface index, built once: the upsampling error of
+    // every method, the floor and the measure query the same poses.
+    let full_surfaces: Vec<SurfaceIndex> =
+        (0..poses.pose_count()).into_par_iter().map(|p| SurfaceIndex::new(&poses.pose_mesh(p))).collect();
     let mut prepared = Vec::new();
     for method in methods {
         let set = methods::simplify_and_map(method, &inputs, target)?;
@@ -222,7 +227,7 @@ fn evaluate_dataset(
             deformed.models.len()
         ));
         let up_started = Instant::now();
-        let up = upsampling::measure(poses, &set, &deformed, &folds, &evaluated, &fitted)
+        let up = upsampling::measure(poses, &set, &deformed, &folds, &evaluated, &fitted, &full_surfaces)
             .with_context(|| format!("{}: upsampling error", method.name()))?;
         log(&format!(
             "{}: upsampled to full resolution, barycentric and fitted U per fold ({:.2} s)",
@@ -240,8 +245,8 @@ fn evaluate_dataset(
     };
     let floor = if let Some(model) = floor {
         let floor_started = Instant::now();
-        let floor =
-            model_floor(&inputs, model, args.folds).context("the model's floor at full resolution")?;
+        let floor = model_floor(&inputs, model, args.folds, &full_surfaces)
+            .context("the model's floor at full resolution")?;
         let seconds = floor_started.elapsed().as_secs_f64();
         log(&format!(
             "the model at full resolution: held-out v2v {:.3e}, {:.2}x in-sample ({seconds:.2} s)",
@@ -259,7 +264,7 @@ fn evaluate_dataset(
         .iter()
         .map(|(_, set, deformed, _)| Run { simplified: &set.mapped.poses, deformed })
         .collect();
-    let measured = measure::measure(poses, &evaluated, &runs);
+    let measured = measure::measure_indexed(poses, &evaluated, &runs, Some(&full_surfaces));
     let measure_seconds = measure_started.elapsed().as_secs_f64();
     log(&format!("measured {} poses x {} methods ({measure_seconds:.2} s)", evaluated.len(), prepared.len()));
     let runs: Vec<MethodRun> = prepared
@@ -327,9 +332,21 @@ fn evaluate_dataset(
 
 /// [`desal_eval::model_floor`] of `model` on the full-resolution pose set, driven by
 /// stage 1's rigid fit of that set, with `k` folds (the method runs' own).
-fn model_floor(inputs: &Inputs, model: &desal_eval::PoseModel, k: usize) -> Result<desal_eval::ModelFloor> {
+fn model_floor(
+    inputs: &Inputs,
+    model: &desal_eval::PoseModel,
+    k: usize,
+    full_surfaces: &[SurfaceIndex],
+) -> Result<desal_eval::ModelFloor> {
     let transforms = measure::part_motions(&inputs.poses, &inputs.labels)?;
-    Ok(desal_eval::model_floor(&inputs.poses, &inputs.labels, &transforms, model, k)?)
+    Ok(desal_eval::model_floor_indexed(
+        &inputs.poses,
+        &inputs.labels,
+        &transforms,
+        model,
+        k,
+        Some(full_surfaces),
+    )?)
 }
 
 /// What every method reads, from the pipeline stages' results.

@@ -15,8 +15,9 @@
 //! - `deformed`: U · (the held-out deformed coarse pose of [`super::measure::deform`]).
 
 use anyhow::{Context, Result};
+use desal_eval::SurfaceIndex;
 use desal_hierarchy::{
-    ChainLevel, Coarse, CsrMatrix, Upsampled, Upsampler, V2f, composed_upsamplers, upsampling_errors,
+    ChainLevel, Coarse, CsrMatrix, Upsampled, Upsampler, composed_upsamplers, upsampling_errors_indexed,
 };
 use desal_mesh::{PoseSet, Vec3};
 use serde::Serialize;
@@ -66,7 +67,8 @@ pub struct UpsamplingReport {
 }
 
 /// Per evaluated pose (in `evaluated`'s order), both upsamplers' errors for one method.
-/// `folds` are `desal eval`'s (test poses each; the template always trains).
+/// `folds` are `desal eval`'s (test poses each; the template always trains);
+/// `full_surfaces[pose]` indexes `full.pose_mesh(pose)`.
 pub fn measure(
     full: &PoseSet,
     set: &SimplifiedSet,
@@ -74,6 +76,7 @@ pub fn measure(
     folds: &[Vec<usize>],
     evaluated: &[usize],
     fitted: &Upsampler,
+    full_surfaces: &[SurfaceIndex],
 ) -> Result<Vec<PoseUpsamplers>> {
     let orig = &set.mapped.map.simp_to_orig;
     let level = [ChainLevel { coarse_to_fine: orig, coarse_faces: &set.mapped.poses.faces }];
@@ -97,7 +100,7 @@ pub fn measure(
                 Upsampled { up_to_full: u, coarse: Coarse::Given(&deformed_coarse) },
             ]
         });
-        let errors = upsampling_errors(full, test, candidates.as_flattened(), V2f::Measure)?;
+        let errors = upsampling_errors_indexed(full, test, candidates.as_flattened(), full_surfaces)?;
         for (slot, &pose) in test.iter().enumerate() {
             let at = |k: usize| {
                 let e = errors[k].per_pose[slot];

@@ -27,7 +27,7 @@ pub(crate) struct Aabb {
 }
 
 impl Aabb {
-    fn empty() -> Self {
+    pub(crate) fn empty() -> Self {
         Self { lo: Vec3::repeat(Real::INFINITY), hi: Vec3::repeat(Real::NEG_INFINITY) }
     }
 
@@ -48,7 +48,7 @@ impl Aabb {
     }
 
     /// Squared distance from `p` to the box (0 inside).
-    fn distance_sq(&self, p: &Vec3) -> Real {
+    pub(crate) fn distance_sq(&self, p: &Vec3) -> Real {
         let below = self.lo - p;
         let above = p - self.hi;
         below.sup(&above).sup(&Vec3::zeros()).norm_squared()
@@ -117,8 +117,18 @@ impl Bvh {
     /// `distance_sq(i)` is the exact squared distance from `p` to primitive `i`. `None`
     /// when there are no primitives.
     pub(crate) fn nearest(&self, p: &Vec3, distance_sq: impl Fn(u32) -> Real) -> Option<(u32, Real)> {
+        self.nearest_from(p, None, distance_sq)
+    }
+
+    /// [`Bvh::nearest`] starting from `best`, a primitive and its exact distance (a seed):
+    /// the same answer, since the search only ever keeps the nearer of two candidates.
+    pub(crate) fn nearest_from(
+        &self,
+        p: &Vec3,
+        mut best: Option<(u32, Real)>,
+        distance_sq: impl Fn(u32) -> Real,
+    ) -> Option<(u32, Real)> {
         let root = self.nodes.first()?;
-        let mut best: Option<(u32, Real)> = None;
         // A node or primitive is pruned only when strictly farther than the best, so
         // every primitive at the best distance is still compared (lowest index wins).
         let pruned = |best: Option<(u32, Real)>, d: Real| best.is_some_and(|(_, b)| d > b);

@@ -17,7 +17,7 @@ use rayon::prelude::*;
 
 use crate::error::EvalError;
 use crate::folds::{folds, training_poses};
-use crate::metrics::{SurfaceIndex, v2f_halves_both_indexed, v2v};
+use crate::metrics::{SurfaceIndex, VertexIndex, mean, v2f_halves_same_faces, vertex_faces};
 use crate::pose_model::PoseModel;
 use crate::transform::PartTransform;
 
@@ -61,6 +61,23 @@ pub fn model_floor(
     model: &PoseModel,
     k: usize,
 ) -> Result<ModelFloor, EvalError> {
+    model_floor_indexed(poses, labels, transforms, model, k, None)
+}
+
+/// [`model_floor`] with each pose's surface index given by the caller (`truth[pose]`
+/// must index `poses.pose_mesh(pose)`), for a caller that already built them: the same
+/// floor.
+pub fn model_floor_indexed(
+    poses: &PoseSet,
+    labels: &PartLabels,
+    transforms: &[Vec<PartTransform>],
+    model: &PoseModel,
+    k: usize,
+    truth: Option<&[SurfaceIndex]>,
+) -> Result<ModelFloor, EvalError> {
+    if let Some(truth) = truth {
+        assert_eq!(truth.len(), poses.pose_count(), "one surface index per pose");
+    }
     let evaluated: Vec<usize> = (0..poses.pose_count()).filter(|&p| p != poses.template).collect();
     let all: Vec<usize> = (0..poses.pose_count()).collect();
     let in_sample = synthesise(poses, labels, transforms, model, &all, &evaluated)?;
@@ -83,8 +100,8 @@ pub fn model_floor(
     Ok(ModelFloor {
         pose_count: evaluated.len(),
         fold_count: test_folds.len(),
-        in_sample: mean_errors(poses, &evaluated, &in_sample),
-        held_out: mean_errors(poses, &evaluated, &held_out),
+        in_sample: mean_errors(poses, &evaluated, &in_sample, truth),
+        held_out: mean_errors(poses, &evaluated, &held_out, truth),
     })
 }
 
@@ -105,7 +122,16 @@ fn synthesise(
 
 /// Mean v2v and v2f of `synthesised[i]` against pose `evaluated[i]`; the per-pose
 /// errors are summed in pose order, so the means do not depend on the thread count.
-fn mean_errors(poses: &PoseSet, evaluated: &[usize], synthesised: &[Vec<Vec3>]) -> MeanErrors {
+fn mean_errors(
+    poses: &PoseSet,
+    evaluated: &[usize],
+    synthesised: &[Vec<Vec3>],
+    truth: Option<&[SurfaceIndex]>,
+) -> MeanErrors {
+    // The synthesised pose has the target's faces and vertex i lies near target vertex
+    // i: every query starts from its own vertex (v2v) or a face of it (v2f).
+    let face_seeds = vertex_faces(&poses.faces, poses.vertex_count());
+    let vertex_seeds: Vec<u32> = (0..poses.vertex_count() as u32).collect();
     let per_pose: Vec<(Real, Real)> = evaluated
         .par_iter()
         .zip(synthesised)
@@ -114,9 +140,21 @@ fn mean_errors(poses: &PoseSet, evaluated: &[usize], synthesised: &[Vec<Vec3>]) 
             let deformed = TriMesh { positions: positions.clone(), faces: poses.faces.clone() };
             // `v2f(&deformed, &target)`, with the deformation's index refitted from the
             // target's (same faces, nearby positions) instead of built.
-            let surface = SurfaceIndex::new(&target);
-            let v2f = v2f_halves_both_indexed(&deformed, &surface.refit(&deformed), &target, &surface);
-            (v2v(&deformed, &target), v2f.combined())
+            let built;
+            let surface = match truth {
+                Some(truth) => &truth[p],
+                None => {
+                    built = SurfaceIndex::new(&target);
+                    &built
+                }
+            };
+            let v2f =
+                v2f_halves_same_faces(&deformed, &surface.refit(&deformed), &target, surface, &face_seeds);
+            // `v2v(&deformed, &target)`, seeded.
+            let v2v = mean(
+                &VertexIndex::new(&target.positions).distances_sq_seeded(&deformed.positions, &vertex_seeds),
+            );
+            (v2v, v2f.combined())
         })
         .collect();
     let n = per_pose.len().max(1) as Real;

@@ -27,6 +27,7 @@ pub mod error;
 pub mod floor;
 pub mod folds;
 pub mod gradient;
+mod grid;
 pub mod lbs;
 pub mod metrics;
 pub mod model;
@@ -37,12 +38,12 @@ pub mod skeleton;
 pub mod transform;
 
 pub use error::EvalError;
-pub use floor::{MeanErrors, ModelFloor, model_floor};
+pub use floor::{MeanErrors, ModelFloor, model_floor, model_floor_indexed};
 pub use folds::{folds, training_poses};
 pub use lbs::{LbsConfig, LbsModel, LbsReport, fit_lbs};
 pub use metrics::{
     SurfaceIndex, V2fHalves, VertexErrors, VertexIndex, v2f, v2f_halves, v2f_halves_both_indexed,
-    v2f_halves_indexed, v2v, vertex_errors,
+    v2f_halves_indexed, v2f_halves_same_faces, v2v, vertex_errors, vertex_faces,
 };
 pub use model::{Anchoring, DEFAULT_ANCHOR_SCALE, Model, ModelConfig, ModelReport, Regression, fit_model};
 pub use poisson::{AnchoredPoissonSolver, PoissonSolver};

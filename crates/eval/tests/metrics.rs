@@ -1,7 +1,7 @@
 //! v2f and v2v against brute-force references on small random meshes, and the ordering
 //! between them that the paper's Table 1 contradicts.
 
-use desal_eval::{SurfaceIndex, v2f, v2f_halves, v2v, vertex_errors};
+use desal_eval::{SurfaceIndex, VertexIndex, v2f, v2f_halves, v2v, vertex_errors, vertex_faces};
 use desal_mesh::{TriMesh, Vec3};
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
@@ -169,6 +169,35 @@ proptest! {
             }
             prop_assert_eq!(refitted.distances_sq(&queries), one_at_a_time(&fresh, &queries));
         }
+    }
+
+    /// Issue 17: a seeded query (the grid from a near seed, the tree from a far or
+    /// missing one) answers exactly as an unseeded one, nearest face or point included,
+    /// whatever the seed: the vertex's own faces, random faces, or none.
+    #[test]
+    fn seeded_queries_match_unseeded(seed in any::<u64>(), side in 2usize..14, jitter in 0.001f64..0.1) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let target = jittered_grid(&mut rng, side, 0.01);
+        let near = jittered_grid(&mut rng, side, jitter);
+        let surface = SurfaceIndex::new(&target);
+        let vertices = VertexIndex::new(&target.positions);
+        let own = vertex_faces(&target.faces, target.vertex_count());
+        let n = near.vertex_count() as u32;
+        let random: Vec<u32> = (0..n).map(|_| rng.gen_range(0..target.face_count() as u32 + 3)).collect();
+        for (i, p) in near.positions.iter().enumerate() {
+            for s in [own[i], random[i], u32::MAX] {
+                prop_assert_eq!(surface.nearest_seeded(p, s), surface.nearest(p));
+            }
+            for s in [i as u32, random[i] % n, u32::MAX] {
+                prop_assert_eq!(vertices.nearest_seeded(p, s), vertices.nearest(p));
+            }
+        }
+        prop_assert_eq!(surface.distances_sq_seeded(&near.positions, &own), surface.distances_sq(&near.positions));
+        let refitted = surface.refit(&near);
+        prop_assert_eq!(
+            refitted.distances_sq_seeded(&target.positions, &own),
+            SurfaceIndex::new(&near).distances_sq(&target.positions)
+        );
     }
 
     /// Issue 6: a vertex is never farther from a surface than from that surface's

@@ -77,6 +77,7 @@ pub use error::HierarchyError;
 pub use fitted::{DEFAULT_NEIGHBOURS, DEFAULT_RIDGE, FitCounts, FittedConfig, Neighbourhood};
 pub use level::{Level, LevelInput, LevelReport, Upsampler, adjacency, build_level, nest, selection};
 pub use measure::{
-    Coarse, PoseError, Upsampled, UpsamplingError, V2f, upsampling_error, upsampling_errors, upsampling_mse,
+    Coarse, PoseError, Upsampled, UpsamplingError, V2f, upsampling_error, upsampling_errors,
+    upsampling_errors_indexed, upsampling_mse,
 };
 pub use sparse::{Coo, CsrMatrix};

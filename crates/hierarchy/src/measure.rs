@@ -8,7 +8,7 @@
 //! the full faces against the full mesh), both in squared input units (m² for SCAPE).
 //! Measure on poses the upsampler was not fitted on to report it held out.
 
-use desal_eval::{SurfaceIndex, metrics::mean, v2f_halves_both_indexed};
+use desal_eval::{SurfaceIndex, metrics::mean, v2f_halves_same_faces, vertex_faces};
 use desal_mesh::{PoseSet, Real, TriMesh, Vec3};
 use rayon::prelude::*;
 
@@ -94,17 +94,55 @@ pub fn upsampling_errors(
     candidates: &[Upsampled],
     v2f: V2f,
 ) -> Result<Vec<UpsamplingError>, HierarchyError> {
+    upsampling_errors_with(full, poses, candidates, v2f, None)
+}
+
+/// [`upsampling_errors`] with v2f, each pose's surface index given by the caller
+/// (`truth[pose]` must index `full.pose_mesh(pose)`): for a caller measuring many
+/// candidate sets against the same poses (`desal eval`, one set per method), which
+/// builds every pose's index once. The same errors.
+pub fn upsampling_errors_indexed(
+    full: &PoseSet,
+    poses: &[usize],
+    candidates: &[Upsampled],
+    truth: &[SurfaceIndex],
+) -> Result<Vec<UpsamplingError>, HierarchyError> {
+    if let Some(&pose) = poses.iter().find(|&&p| p >= truth.len()) {
+        return Err(HierarchyError::PoseOutOfRange { pose, poses: truth.len() });
+    }
+    upsampling_errors_with(full, poses, candidates, V2f::Measure, Some(truth))
+}
+
+/// Both of the above: `truth[pose]` is the pose's surface index, else it is built.
+fn upsampling_errors_with(
+    full: &PoseSet,
+    poses: &[usize],
+    candidates: &[Upsampled],
+    v2f: V2f,
+    truth_index: Option<&[SurfaceIndex]>,
+) -> Result<Vec<UpsamplingError>, HierarchyError> {
     for c in candidates {
         check_candidate(full, c, poses)?;
     }
     let n0 = full.vertex_count();
+    // An upsampled mesh has the truth's faces and vertex i lies near truth vertex i, so
+    // every v2f query starts from a face of its own vertex.
+    let seeds = if v2f == V2f::Measure { vertex_faces(&full.faces, n0) } else { Vec::new() };
     // Per pose, per candidate: the pose's error and its per-vertex squared distances.
     let measured: Vec<Vec<(PoseError, Vec<Real>)>> = poses
         .par_iter()
         .enumerate()
         .map(|(slot, &pose)| {
             let truth = full.pose_mesh(pose);
-            let truth_surface = (v2f == V2f::Measure).then(|| SurfaceIndex::new(&truth));
+            let built;
+            let truth_surface = match (v2f, truth_index) {
+                (V2f::Skip, _) => None,
+                (V2f::Measure, Some(given)) => Some(&given[pose]),
+                (V2f::Measure, None) => {
+                    built = SurfaceIndex::new(&truth);
+                    Some(&built)
+                }
+            };
             candidates
                 .iter()
                 .map(|c| {
@@ -114,7 +152,7 @@ pub fn upsampling_errors(
                         // The upsampled mesh has the truth's faces and lies near it, so
                         // the truth's tree refitted serves it as well as a new one.
                         let up_mesh = TriMesh { positions: up, faces: full.faces.clone() };
-                        v2f_halves_both_indexed(&up_mesh, &surface.refit(&up_mesh), &truth, surface)
+                        v2f_halves_same_faces(&up_mesh, &surface.refit(&up_mesh), &truth, surface, &seeds)
                             .combined()
                     });
                     (PoseError { pose, mse: mean(&squared), v2f }, squared)
