@@ -211,8 +211,10 @@ fn evaluate_dataset(
     let fitted = crate::stages::hierarchy::measured_fitted(dataset.spec.hierarchy.as_ref())?;
     // Every full-resolution pose's surface index, built once: the upsampling error of
     // every method, the floor and the measure query the same poses.
-    let full_surfaces: Vec<SurfaceIndex> =
-        (0..poses.pose_count()).into_par_iter().map(|p| SurfaceIndex::new(&poses.pose_mesh(p))).collect();
+    let full_surfaces: Vec<SurfaceIndex> = (0..poses.pose_count())
+        .into_par_iter()
+        .map(|p| SurfaceIndex::with_vertex_rings(&poses.pose_mesh(p)))
+        .collect();
     let mut prepared = Vec::new();
     for method in methods {
         let set = methods::simplify_and_map(method, &inputs, target)?;

@@ -31,6 +31,32 @@ pub struct SurfaceIndex {
     bvh: Bvh,
     /// For seeded queries ([`SurfaceIndex::nearest_seeded`]); `None` without faces.
     grid: Option<Grid>,
+    /// For queries near the indexed mesh's own vertices
+    /// ([`SurfaceIndex::with_vertex_rings`]).
+    rings: Option<VertexRings>,
+}
+
+/// Each vertex of an indexed mesh with its faces and its *clearance*: how far every
+/// other face is from it. A point within `δ` of vertex `v` is farther than
+/// `clearance[v] − δ` from every face not using `v` (the triangle inequality), so when
+/// one of `v`'s own faces is nearer than that, it is the answer, found from a handful
+/// of exact tests and no search.
+#[derive(Debug, Clone)]
+struct VertexRings {
+    /// Vertex `v`'s faces are `faces[starts[v]..starts[v + 1]]`, in increasing order.
+    starts: Vec<u32>,
+    faces: Vec<u32>,
+    positions: Vec<Vec3>,
+    /// The exact distance from vertex `v` to the nearest face not using it, shrunk far
+    /// beyond its rounding (+∞ when every face uses `v`, 0 when none does: such a
+    /// vertex never certifies anything).
+    clearance: Vec<Real>,
+}
+
+impl VertexRings {
+    fn ring(&self, v: usize) -> &[u32] {
+        &self.faces[self.starts[v] as usize..self.starts[v + 1] as usize]
+    }
 }
 
 impl SurfaceIndex {
@@ -38,7 +64,55 @@ impl SurfaceIndex {
     pub fn new(mesh: &TriMesh) -> Self {
         let triangles: Vec<[Vec3; 3]> = (0..mesh.face_count()).map(|f| mesh.corners(f)).collect();
         let boxes: Vec<Aabb> = triangles.iter().map(|t| Aabb::of_points(t)).collect();
-        Self { bvh: Bvh::build(&boxes), grid: surface_grid(&boxes), triangles }
+        Self { bvh: Bvh::build(&boxes), grid: surface_grid(&boxes), triangles, rings: None }
+    }
+
+    /// [`SurfaceIndex::new`] that also answers [`SurfaceIndex::distances_sq_near_vertices`]
+    /// from each vertex's own faces: for a mesh many point sets are measured against,
+    /// each point near a vertex of it (a full-resolution pose against its upsamplings
+    /// and deformations). The build costs about one unseeded query per vertex.
+    pub fn with_vertex_rings(mesh: &TriMesh) -> Self {
+        let mut index = Self::new(mesh);
+        let n = mesh.vertex_count();
+        let mut starts = vec![0u32; n + 1];
+        for face in &mesh.faces {
+            for &v in face {
+                starts[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..n {
+            starts[v + 1] += starts[v];
+        }
+        let mut next = starts.clone();
+        let mut faces = vec![0u32; starts[n] as usize];
+        // Faces in increasing index, so each ring lists them in order.
+        for (f, face) in mesh.faces.iter().enumerate() {
+            for &v in face {
+                faces[next[v as usize] as usize] = f as u32;
+                next[v as usize] += 1;
+            }
+        }
+        let scale = mesh.positions.iter().map(|p| p.abs().max()).fold(0.0, Real::max);
+        let margin = 1e-12 * scale.max(Real::MIN_POSITIVE);
+        let clearance: Vec<Real> = (0..n)
+            .into_par_iter()
+            .map(|v| {
+                let ring = &faces[starts[v] as usize..starts[v + 1] as usize];
+                if ring.is_empty() {
+                    return 0.0;
+                }
+                let p = &mesh.positions[v];
+                let other = |f: u32| {
+                    if ring.binary_search(&f).is_ok() { Real::INFINITY } else { index.distance_sq(p, f) }
+                };
+                match index.bvh.nearest(p, other) {
+                    Some((_, d)) if d.is_finite() => (d.sqrt() * (1.0 - 1e-9) - margin).max(0.0),
+                    Some(_) | None => Real::INFINITY,
+                }
+            })
+            .collect();
+        index.rings = Some(VertexRings { starts, faces, positions: mesh.positions.clone(), clearance });
+        index
     }
 
     /// The index of `mesh`, which has as many faces as the indexed mesh (typically the
@@ -48,7 +122,7 @@ impl SurfaceIndex {
     pub fn refit(&self, mesh: &TriMesh) -> Self {
         let triangles: Vec<[Vec3; 3]> = (0..mesh.face_count()).map(|f| mesh.corners(f)).collect();
         let boxes: Vec<Aabb> = triangles.iter().map(|t| Aabb::of_points(t)).collect();
-        Self { bvh: self.bvh.refitted(&boxes), grid: surface_grid(&boxes), triangles }
+        Self { bvh: self.bvh.refitted(&boxes), grid: surface_grid(&boxes), triangles, rings: None }
     }
 
     /// Squared distance from `p` to the surface, with the index of a nearest face (the
@@ -70,11 +144,19 @@ impl SurfaceIndex {
     /// The same answer whatever the seed (an out-of-range seed is no seed); a near seed
     /// makes it several times faster.
     pub fn nearest_seeded(&self, p: &Vec3, seed: u32) -> Option<(u32, Real)> {
-        let distance = |f: u32| {
-            let [a, b, c] = &self.triangles[f as usize];
-            point_triangle_distance_sq(p, a, b, c)
-        };
-        let best = ((seed as usize) < self.triangles.len()).then(|| (seed, distance(seed)));
+        let best = ((seed as usize) < self.triangles.len()).then(|| (seed, self.distance_sq(p, seed)));
+        self.nearest_from(p, best)
+    }
+
+    fn distance_sq(&self, p: &Vec3, f: u32) -> Real {
+        let [a, b, c] = &self.triangles[f as usize];
+        point_triangle_distance_sq(p, a, b, c)
+    }
+
+    /// The nearest face from `best`, a face and its exact distance: the grid, then the
+    /// tree if the bound is too loose for the grid.
+    fn nearest_from(&self, p: &Vec3, best: Option<(u32, Real)>) -> Option<(u32, Real)> {
+        let distance = |f: u32| self.distance_sq(p, f);
         let best = match (&self.grid, best) {
             (Some(grid), Some(best)) => match grid.nearest(p, best, true, distance) {
                 Ok(found) => return Some(found),
@@ -104,6 +186,39 @@ impl SurfaceIndex {
                 self.nearest_seeded(p, s).map_or(Real::INFINITY, |(_, d)| d)
             })
             .collect()
+    }
+
+    /// [`SurfaceIndex::distances_sq_seeded`] of points each lying near the indexed
+    /// mesh's vertex of the same index (`points[i]` near vertex `i`; `vertex_faces` is
+    /// [`vertex_faces`] of its faces): with [`SurfaceIndex::with_vertex_rings`], a
+    /// point whose own vertex's faces are provably nearest is answered from them alone.
+    /// The same distances.
+    pub fn distances_sq_near_vertices(&self, points: &[Vec3], vertex_faces: &[u32]) -> Vec<Real> {
+        let Some(rings) = self.rings.as_ref().filter(|r| r.positions.len() == points.len()) else {
+            return self.distances_sq_seeded(points, vertex_faces);
+        };
+        points.par_iter().enumerate().map(|(v, p)| self.near_vertex(rings, v, p)).collect()
+    }
+
+    fn near_vertex(&self, rings: &VertexRings, v: usize, p: &Vec3) -> Real {
+        let mut best: Option<(u32, Real)> = None;
+        for &f in rings.ring(v) {
+            let d = self.distance_sq(p, f);
+            if best.is_none_or(|(g, e)| d < e || (d == e && f < g)) {
+                best = Some((f, d));
+            }
+        }
+        if let Some((_, d)) = best {
+            // Every other face is at least `clearance − δ` away; the bound is shrunk
+            // far beyond the rounding of `δ`, so a face it rules out is strictly
+            // farther than `d` and can neither win nor tie.
+            let delta = (p - rings.positions[v]).norm();
+            let bound = (rings.clearance[v] - delta) * (1.0 - 1e-9) - 1e-12 * p.abs().max();
+            if bound > 0.0 && d < bound * bound {
+                return d;
+            }
+        }
+        self.nearest_from(p, best).map_or(Real::INFINITY, |(_, d)| d)
     }
 }
 
@@ -263,8 +378,8 @@ pub fn v2f_halves_same_faces(
     b_surface: &SurfaceIndex,
     vertex_faces: &[u32],
 ) -> V2fHalves {
-    let a_to_b = b_surface.distances_sq_seeded(&a.positions, vertex_faces);
-    let b_to_a = a_surface.distances_sq_seeded(&b.positions, vertex_faces);
+    let a_to_b = b_surface.distances_sq_near_vertices(&a.positions, vertex_faces);
+    let b_to_a = a_surface.distances_sq_near_vertices(&b.positions, vertex_faces);
     V2fHalves {
         a_to_b: mean(&a_to_b),
         b_to_a: mean(&b_to_a),

@@ -193,6 +193,10 @@ proptest! {
             }
         }
         prop_assert_eq!(surface.distances_sq_seeded(&near.positions, &own), surface.distances_sq(&near.positions));
+        // Issue 17: from each vertex's own faces where its clearance proves them nearest.
+        let rings = SurfaceIndex::with_vertex_rings(&target);
+        prop_assert_eq!(rings.distances_sq_near_vertices(&near.positions, &own), surface.distances_sq(&near.positions));
+        prop_assert_eq!(rings.distances_sq_near_vertices(&target.positions, &own), surface.distances_sq(&target.positions));
         let refitted = surface.refit(&near);
         prop_assert_eq!(
             refitted.distances_sq_seeded(&target.positions, &own),
