@@ -25,7 +25,8 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let path = PathBuf::from(args.next().expect("usage: seeded_queries MESH.ply [ROUNDS]"));
     let rounds: usize = args.next().map_or(1, |r| r.parse().expect("ROUNDS is a count"));
-    let rings = args.next().is_some_and(|a| a == "rings");
+    let mode = args.next().unwrap_or_default();
+    let rings = mode == "rings";
     let mesh = desal_io::read_mesh(&path).expect("a readable mesh");
     let mut rng = ChaCha8Rng::seed_from_u64(17);
     let points: Vec<Vec3> = mesh
@@ -40,7 +41,10 @@ fn main() {
             seeds[v as usize] = f as u32;
         }
     }
-    let index = if rings { SurfaceIndex::with_vertex_rings(&mesh) } else { SurfaceIndex::new(&mesh) };
+    let index = match mode.as_str() {
+        "rings" => SurfaceIndex::with_vertex_rings(&mesh),
+        _ => SurfaceIndex::new(&mesh),
+    };
     let mut sum = 0.0;
     for _ in 0..rounds {
         let distances = if rings {

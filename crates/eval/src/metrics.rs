@@ -156,7 +156,18 @@ impl SurfaceIndex {
     /// The nearest face from `best`, a face and its exact distance: the grid, then the
     /// tree if the bound is too loose for the grid.
     fn nearest_from(&self, p: &Vec3, best: Option<(u32, Real)>) -> Option<(u32, Real)> {
-        let distance = |f: u32| self.distance_sq(p, f);
+        self.nearest_from_with(p, best, |f: u32| self.distance_sq(p, f))
+    }
+
+    /// [`SurfaceIndex::nearest_from`] with the exact distance given (one that answers
+    /// +∞ for faces known not to beat `best`).
+    fn nearest_from_with(
+        &self,
+        p: &Vec3,
+        best: Option<(u32, Real)>,
+        distance: impl Fn(u32) -> Real,
+    ) -> Option<(u32, Real)> {
+        let distance = &distance;
         let best = match (&self.grid, best) {
             (Some(grid), Some(best)) => match grid.nearest(p, best, true, distance) {
                 Ok(found) => return Some(found),
@@ -201,8 +212,9 @@ impl SurfaceIndex {
     }
 
     fn near_vertex(&self, rings: &VertexRings, v: usize, p: &Vec3) -> Real {
+        let ring = rings.ring(v);
         let mut best: Option<(u32, Real)> = None;
-        for &f in rings.ring(v) {
+        for &f in ring {
             let d = self.distance_sq(p, f);
             if best.is_none_or(|(g, e)| d < e || (d == e && f < g)) {
                 best = Some((f, d));
@@ -218,7 +230,11 @@ impl SurfaceIndex {
                 return d;
             }
         }
-        self.nearest_from(p, best).map_or(Real::INFINITY, |(_, d)| d)
+        // The search from the ring's best: a ring face can neither beat it nor tie with
+        // a lower index, so none is tested again.
+        let other =
+            |f: u32| if ring.binary_search(&f).is_ok() { Real::INFINITY } else { self.distance_sq(p, f) };
+        self.nearest_from_with(p, best, other).map_or(Real::INFINITY, |(_, d)| d)
     }
 }
 
