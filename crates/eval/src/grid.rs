@@ -39,8 +39,8 @@ pub(crate) struct Grid {
     /// Cell `c` holds `entries[starts[c]..starts[c + 1]]`, in primitive order.
     starts: Vec<u32>,
     entries: Vec<u32>,
-    /// `boxes[entries[k]]`, contiguous with the entries a cell scan reads.
-    entry_boxes: Vec<Aabb>,
+    /// Primitive `i`'s box (each stored once, however many cells list it).
+    boxes: Vec<Aabb>,
     /// Absolute widening of a query's cube, far above the rounding of its coordinates.
     margin: Real,
 }
@@ -73,7 +73,7 @@ impl Grid {
             dims,
             starts: Vec::new(),
             entries: Vec::new(),
-            entry_boxes: Vec::new(),
+            boxes: boxes.to_vec(),
             margin: 1e-12 * scale.max(Real::MIN_POSITIVE),
         };
         let cell_count = dims[0] * dims[1] * dims[2];
@@ -88,19 +88,16 @@ impl Grid {
         let total = counts[cell_count] as usize;
         let mut next = counts.clone();
         let mut entries = vec![0u32; total];
-        let mut entry_boxes = vec![Aabb { lo: Vec3::zeros(), hi: Vec3::zeros() }; total];
         // Primitives in increasing index, so each cell lists them in order.
         for (i, r) in ranges.iter().enumerate() {
             grid.for_cells(r, |c| {
                 let k = next[c] as usize;
                 entries[k] = i as u32;
-                entry_boxes[k] = boxes[i];
                 next[c] += 1;
             });
         }
         grid.starts = counts;
         grid.entries = entries;
-        grid.entry_boxes = entry_boxes;
         Some(grid)
     }
 
@@ -146,12 +143,12 @@ impl Grid {
         let scan = |c: usize, best: &mut (u32, Real)| {
             let (start, end) = (self.starts[c] as usize, self.starts[c + 1] as usize);
             for k in start..end {
-                let box_d = box_distance_sq(&self.entry_boxes[k], p);
+                let prim = self.entries[k];
+                let box_d = box_distance_sq(&self.boxes[prim as usize], p);
                 // Strictly farther than the best: it can neither win nor tie.
                 if box_d > best.1 {
                     continue;
                 }
-                let prim = self.entries[k];
                 let d = if has_boxes { distance_sq(prim) } else { box_d };
                 if d < best.1 || (d == best.1 && prim < best.0) {
                     *best = (prim, d);

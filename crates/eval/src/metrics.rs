@@ -167,16 +167,7 @@ impl SurfaceIndex {
         best: Option<(u32, Real)>,
         distance: impl Fn(u32) -> Real,
     ) -> Option<(u32, Real)> {
-        let distance = &distance;
-        let best = match (&self.grid, best) {
-            (Some(grid), Some(best)) => match grid.nearest(p, best, true, distance) {
-                Ok(found) => return Some(found),
-                // Too loose a bound for the grid: the tree goes on from what it found.
-                Err(so_far) => Some(so_far),
-            },
-            _ => best,
-        };
-        self.bvh.nearest_from(p, best, distance)
+        grid_then_tree(self.grid.as_ref(), &self.bvh, p, best, true, distance)
     }
 
     /// [`SurfaceIndex::distances_sq`] with a seed per point (`seeds[i]` for `points[i]`,
@@ -238,6 +229,29 @@ impl SurfaceIndex {
     }
 }
 
+/// The nearest primitive from `best` (a primitive and its exact distance): the grid,
+/// then the tree if the bound is too loose for the grid, or with no grid or no `best`
+/// (see [`Grid::nearest`] for `has_boxes`).
+fn grid_then_tree(
+    grid: Option<&Grid>,
+    bvh: &Bvh,
+    p: &Vec3,
+    best: Option<(u32, Real)>,
+    has_boxes: bool,
+    distance: impl Fn(u32) -> Real,
+) -> Option<(u32, Real)> {
+    let distance = &distance;
+    let best = match (grid, best) {
+        (Some(grid), Some(best)) => match grid.nearest(p, best, has_boxes, distance) {
+            Ok(found) => return Some(found),
+            // Too loose a bound for the grid: the tree goes on from what it found.
+            Err(so_far) => Some(so_far),
+        },
+        _ => best,
+    };
+    bvh.nearest_from(p, best, distance)
+}
+
 /// The grid of a triangle surface: cells 1.5 times the mean triangle's largest box
 /// side, so a seeded query near the surface visits one to a few cells of a few dozen
 /// triangles (1, 2 and 3 times took 3 %, 4 % and 22 % more instructions on a SCAPE
@@ -288,15 +302,7 @@ impl VertexIndex {
     pub fn nearest_seeded(&self, p: &Vec3, seed: u32) -> Option<(u32, Real)> {
         let distance = |i: u32| (self.points[i as usize] - p).norm_squared();
         let best = ((seed as usize) < self.points.len()).then(|| (seed, distance(seed)));
-        let best = match (&self.grid, best) {
-            (Some(grid), Some(best)) => match grid.nearest(p, best, false, distance) {
-                Ok(found) => return Some(found),
-                // Too loose a bound for the grid: the tree goes on from what it found.
-                Err(so_far) => Some(so_far),
-            },
-            _ => best,
-        };
-        self.bvh.nearest_from(p, best, distance)
+        grid_then_tree(self.grid.as_ref(), &self.bvh, p, best, false, distance)
     }
 
     /// [`VertexIndex::distances_sq`] with a seed per point (`seeds[i]` for `points[i]`):
