@@ -18,7 +18,10 @@
 //! to read). An entry is built in a temp folder beside it (`.tmp-<key>-<pid>-<n>`) and
 //! renamed into place, so a killed run leaves no entry behind, only a temp folder that no
 //! lookup ever reads. An entry whose artifact fails its checksum is reported, deleted
-//! and recomputed, never used.
+//! and recomputed, never used. Runs sharing a cache (shards) may replace an entry while
+//! another reads it: a lookup that finds the entry half gone is a plain miss, and a file
+//! read later (an output copy, a body decoded on first use) waits for the entry to be
+//! stored again ([`read_entry_file`]).
 //!
 //! Why an entry missed: after each stage run, its key's components are recorded under
 //! `<cache>/explain/<dataset>/<stage>.json`; a miss compares the new components with that
@@ -27,10 +30,41 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use desal_io::artifact::{self, ArtifactBody, ContentHash, InputRef, Producer};
 use serde::{Deserialize, Serialize};
+
+/// How long a reader waits for a cache entry's file that another run is replacing.
+const REPLACED_ENTRY_WAIT: Duration = Duration::from_secs(30);
+
+/// `read(path)` of a file in a cache entry that another run may be replacing.
+///
+/// Runs sharing a cache (shards) can replace an entry while this run still reads it.
+/// A `--force` run, or one that rejected the entry, evicts the entry and stores it
+/// again at once, with the same content by the key's construction. So while the file
+/// is missing, the read is tried again, for up to [`REPLACED_ENTRY_WAIT`]. Any other
+/// failure, or a file still missing after that, is the error.
+pub fn read_entry_file<R, E>(path: &Path, read: impl FnMut(&Path) -> Result<R, E>) -> Result<R, E> {
+    read_entry_file_within(path, REPLACED_ENTRY_WAIT, read)
+}
+
+fn read_entry_file_within<R, E>(
+    path: &Path,
+    wait: Duration,
+    mut read: impl FnMut(&Path) -> Result<R, E>,
+) -> Result<R, E> {
+    let start = Instant::now();
+    loop {
+        match read(path) {
+            Err(_) if !path.exists() && start.elapsed() < wait => {
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            done => return done,
+        }
+    }
+}
 
 /// Canonical JSON of a parameter struct: sorted keys, no whitespace. This is the form
 /// that enters cache keys and artifact producers.
@@ -208,11 +242,14 @@ impl Cache {
         }) {
             Ok(header) => match fs::read(dir.join("summary.json")) {
                 Ok(summary) => Some(Hit { hash: header.checksum, summary }),
+                // Gone with its artifact: another run is replacing the entry, a miss.
+                Err(_) if !path.exists() => None,
                 Err(e) => {
                     self.reject(key, &format!("{}: {e}", dir.join("summary.json").display()));
                     None
                 }
             },
+            Err(_) if !path.exists() => None,
             Err(e) => {
                 self.reject(key, &e);
                 None
@@ -407,6 +444,32 @@ mod tests {
     }
 
     /// Every component of the key changes the key (one test per key input).
+    /// A shard that reads an entry's file while another replaces the entry (evicted,
+    /// then stored again) gets the stored file; a file that stays missing is an error
+    /// once the wait is over. (CI once failed a shard's copy of an entry another
+    /// shard's `--force` run had just evicted.)
+    #[test]
+    fn an_entry_file_being_replaced_is_waited_for() {
+        let dir = std::env::temp_dir().join(format!("desal-cache-replaced-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("artifact.dsa");
+        let writer = {
+            let path = path.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(50));
+                fs::write(&path, b"stored again").unwrap();
+            })
+        };
+        let read = read_entry_file_within(&path, Duration::from_secs(20), |p: &Path| fs::read(p));
+        writer.join().unwrap();
+        assert_eq!(read.unwrap(), b"stored again");
+        fs::remove_file(&path).unwrap();
+        let start = Instant::now();
+        assert!(read_entry_file_within(&path, Duration::from_millis(30), |p: &Path| fs::read(p)).is_err());
+        assert!(start.elapsed() >= Duration::from_millis(30));
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn every_component_changes_the_key() {
         let base = key().hash();

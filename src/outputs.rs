@@ -69,7 +69,8 @@ impl DatasetOutputs {
     pub fn write_into(self, dir: &Path) -> Result<()> {
         for (file, source) in &self.artifacts {
             let dest = dir.join(file);
-            std::fs::copy(source, &dest)
+            // The source is a cache entry, which a shard sharing the cache may be replacing.
+            crate::cache::read_entry_file(source, |source| std::fs::copy(source, &dest))
                 .with_context(|| format!("cannot copy {} to {}", source.display(), dest.display()))?;
         }
         for (file, write) in self.files {

@@ -91,7 +91,9 @@ impl<T: ArtifactBody, S> Staged<T, S> {
         if let Some(body) = self.body.get() {
             return Ok(body);
         }
-        let (_, body, _) = desal_io::artifact::read_artifact::<T>(&self.artifact_path)?;
+        // A cache entry, which a shard sharing the cache may be replacing.
+        let (_, body, _) =
+            crate::cache::read_entry_file(&self.artifact_path, desal_io::artifact::read_artifact::<T>)?;
         Ok(self.body.get_or_init(|| body))
     }
 }
