@@ -178,14 +178,13 @@ impl SurfaceIndex {
             .par_iter()
             .zip(seeds)
             .map(|(p, &s)| {
+                let best = ((s as usize) < self.triangles.len()).then(|| (s, self.distance_sq(p, s)));
                 // A point on its seed face (a vertex the upsampler kept in place) is at
                 // distance 0, which nothing beats: no search, the same distance.
-                if let Some([a, b, c]) = self.triangles.get(s as usize)
-                    && point_triangle_distance_sq(p, a, b, c) == 0.0
-                {
+                if best.is_some_and(|(_, d)| d == 0.0) {
                     return 0.0;
                 }
-                self.nearest_seeded(p, s).map_or(Real::INFINITY, |(_, d)| d)
+                self.nearest_from(p, best).map_or(Real::INFINITY, |(_, d)| d)
             })
             .collect()
     }
