@@ -366,15 +366,16 @@ pub fn measure_indexed(
     full_surfaces: Option<&[SurfaceIndex]>,
 ) -> Vec<Measured> {
     type PoseResult = Vec<(PoseErrors, PoseErrors, Vec<f64>)>;
-    let full_template = Target::new(full.template_mesh());
+    let full_target = |pose: usize| match full_surfaces {
+        Some(s) => Target::with_surface(full.pose_mesh(pose), Cow::Borrowed(&s[pose])),
+        None => Target::new(full.pose_mesh(pose)),
+    };
+    let full_template = full_target(full.template);
     let seeds: Vec<RunSeeds> = runs.iter().map(|run| RunSeeds::new(full, &full_template, run)).collect();
     let per_pose: Vec<PoseResult> = evaluated
         .par_iter()
         .map(|&pose| {
-            let full_target = match full_surfaces {
-                Some(s) => Target::with_surface(full.pose_mesh(pose), Cow::Borrowed(&s[pose])),
-                None => Target::new(full.pose_mesh(pose)),
-            };
+            let full_target = full_target(pose);
             runs.iter()
                 .zip(&seeds)
                 .map(|(run, seeds)| {

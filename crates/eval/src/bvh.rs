@@ -39,7 +39,7 @@ impl Aabb {
         Self { lo: self.lo.inf(p), hi: self.hi.sup(p) }
     }
 
-    fn union(self, other: &Self) -> Self {
+    pub(crate) fn union(self, other: &Self) -> Self {
         Self { lo: self.lo.inf(&other.lo), hi: self.hi.sup(&other.hi) }
     }
 
@@ -48,7 +48,7 @@ impl Aabb {
     }
 
     /// Squared distance from `p` to the box (0 inside).
-    pub(crate) fn distance_sq(&self, p: &Vec3) -> Real {
+    fn distance_sq(&self, p: &Vec3) -> Real {
         let below = self.lo - p;
         let above = p - self.hi;
         below.sup(&above).sup(&Vec3::zeros()).norm_squared()

@@ -50,8 +50,7 @@ impl Grid {
     /// (grown when the grid would be too large). `None` when there is nothing to index
     /// or a box is not finite.
     pub(crate) fn build(boxes: &[Aabb], cell: Real) -> Option<Self> {
-        let bounds =
-            boxes.iter().fold(Aabb::of_points(&[]), |b, x| Aabb { lo: b.lo.inf(&x.lo), hi: b.hi.sup(&x.hi) });
+        let bounds = boxes.iter().fold(Aabb::empty(), |b, x| b.union(x));
         let finite = |v: &Vec3| v.iter().all(|c| c.is_finite());
         if boxes.is_empty() || !finite(&bounds.lo) || !finite(&bounds.hi) {
             return None;

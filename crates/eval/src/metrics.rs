@@ -16,7 +16,7 @@
 //! vertex, so the deformed → target half of v2f is at most v2v (tested). Unreferenced
 //! target vertices count for v2v but not for the surface.
 
-use desal_mesh::{Face, Real, TriMesh, Vec3};
+use desal_mesh::{Face, Real, TriMesh, Vec3, VertexFaces};
 use rayon::prelude::*;
 
 use crate::bvh::{Aabb, Bvh};
@@ -43,20 +43,13 @@ pub struct SurfaceIndex {
 /// of exact tests and no search.
 #[derive(Debug, Clone)]
 struct VertexRings {
-    /// Vertex `v`'s faces are `faces[starts[v]..starts[v + 1]]`, in increasing order.
-    starts: Vec<u32>,
-    faces: Vec<u32>,
+    /// Each vertex's faces, in increasing order.
+    faces: VertexFaces,
     positions: Vec<Vec3>,
     /// The exact distance from vertex `v` to the nearest face not using it, shrunk far
     /// beyond its rounding (+∞ when every face uses `v`, 0 when none does: such a
     /// vertex never certifies anything).
     clearance: Vec<Real>,
-}
-
-impl VertexRings {
-    fn ring(&self, v: usize) -> &[u32] {
-        &self.faces[self.starts[v] as usize..self.starts[v + 1] as usize]
-    }
 }
 
 impl SurfaceIndex {
@@ -73,35 +66,17 @@ impl SurfaceIndex {
     /// and deformations). The build costs about one unseeded query per vertex.
     pub fn with_vertex_rings(mesh: &TriMesh) -> Self {
         let mut index = Self::new(mesh);
-        let n = mesh.vertex_count();
-        let mut starts = vec![0u32; n + 1];
-        for face in &mesh.faces {
-            for &v in face {
-                starts[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..n {
-            starts[v + 1] += starts[v];
-        }
-        let mut next = starts.clone();
-        let mut faces = vec![0u32; starts[n] as usize];
-        // Faces in increasing index, so each ring lists them in order.
-        for (f, face) in mesh.faces.iter().enumerate() {
-            for &v in face {
-                faces[next[v as usize] as usize] = f as u32;
-                next[v as usize] += 1;
-            }
-        }
+        let faces = VertexFaces::new(mesh.vertex_count(), &mesh.faces);
         let scale = mesh.positions.iter().map(|p| p.abs().max()).fold(0.0, Real::max);
         let margin = 1e-12 * scale.max(Real::MIN_POSITIVE);
-        let clearance: Vec<Real> = (0..n)
+        let clearance: Vec<Real> = (0..mesh.vertex_count() as u32)
             .into_par_iter()
             .map(|v| {
-                let ring = &faces[starts[v] as usize..starts[v + 1] as usize];
+                let ring = faces.of(v);
                 if ring.is_empty() {
                     return 0.0;
                 }
-                let p = &mesh.positions[v];
+                let p = &mesh.positions[v as usize];
                 let other = |f: u32| {
                     if ring.binary_search(&f).is_ok() { Real::INFINITY } else { index.distance_sq(p, f) }
                 };
@@ -111,7 +86,7 @@ impl SurfaceIndex {
                 }
             })
             .collect();
-        index.rings = Some(VertexRings { starts, faces, positions: mesh.positions.clone(), clearance });
+        index.rings = Some(VertexRings { faces, positions: mesh.positions.clone(), clearance });
         index
     }
 
@@ -202,7 +177,7 @@ impl SurfaceIndex {
     }
 
     fn near_vertex(&self, rings: &VertexRings, v: usize, p: &Vec3) -> Real {
-        let ring = rings.ring(v);
+        let ring = rings.faces.of(v as u32);
         let mut best: Option<(u32, Real)> = None;
         for &f in ring {
             let d = self.distance_sq(p, f);
