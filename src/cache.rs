@@ -443,7 +443,6 @@ mod tests {
         }
     }
 
-    /// Every component of the key changes the key (one test per key input).
     /// A shard that reads an entry's file while another replaces the entry (evicted,
     /// then stored again) gets the stored file; a file that stays missing is an error
     /// once the wait is over. (CI once failed a shard's copy of an entry another
@@ -470,6 +469,7 @@ mod tests {
         fs::remove_dir_all(&dir).unwrap();
     }
 
+    /// Every component of the key changes the key (one test per key input).
     #[test]
     fn every_component_changes_the_key() {
         let base = key().hash();

@@ -13,6 +13,9 @@
 //! of distances checks that a change kept every answer. With `rings`, the index is
 //! built `SurfaceIndex::with_vertex_rings` and queried by
 //! `SurfaceIndex::distances_sq_near_vertices`, as `desal eval` queries its full poses.
+//! It also prints the resident memory an index keeps: ten are built and kept, and the
+//! growth divided by ten (Linux's `/proc/self/statm`; 0 elsewhere), so the build's
+//! transient buffers, reused from one build to the next, barely count.
 
 use std::path::PathBuf;
 
@@ -25,8 +28,7 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let path = PathBuf::from(args.next().expect("usage: seeded_queries MESH.ply [ROUNDS]"));
     let rounds: usize = args.next().map_or(1, |r| r.parse().expect("ROUNDS is a count"));
-    let mode = args.next().unwrap_or_default();
-    let rings = mode == "rings";
+    let rings = args.next().is_some_and(|a| a == "rings");
     let mesh = desal_io::read_mesh(&path).expect("a readable mesh");
     let mut rng = ChaCha8Rng::seed_from_u64(17);
     let points: Vec<Vec3> = mesh
@@ -41,10 +43,13 @@ fn main() {
             seeds[v as usize] = f as u32;
         }
     }
-    let index = match mode.as_str() {
-        "rings" => SurfaceIndex::with_vertex_rings(&mesh),
-        _ => SurfaceIndex::new(&mesh),
-    };
+    const COPIES: usize = 10;
+    let before = resident_bytes();
+    let indices: Vec<SurfaceIndex> = (0..COPIES)
+        .map(|_| if rings { SurfaceIndex::with_vertex_rings(&mesh) } else { SurfaceIndex::new(&mesh) })
+        .collect();
+    let index_mb = resident_bytes().saturating_sub(before) as f64 / 1e6 / COPIES as f64;
+    let index = &indices[0];
     let mut sum = 0.0;
     for _ in 0..rounds {
         let distances = if rings {
@@ -55,4 +60,11 @@ fn main() {
         sum += distances.iter().sum::<f64>();
     }
     println!("{} points × {rounds}: sum of squared distances {sum:.17e}", points.len());
+    println!("each index: {index_mb:.1} MB resident");
+}
+
+/// This process's resident memory, from `/proc/self/statm` (4 KiB pages), or 0.
+fn resident_bytes() -> usize {
+    let statm = std::fs::read_to_string("/proc/self/statm").unwrap_or_default();
+    statm.split_whitespace().nth(1).and_then(|pages| pages.parse::<usize>().ok()).unwrap_or(0) * 4096
 }
