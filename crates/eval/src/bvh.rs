@@ -47,11 +47,20 @@ impl Aabb {
         (self.lo + self.hi) * 0.5
     }
 
-    /// Squared distance from `p` to the box (0 inside).
-    fn distance_sq(&self, p: &Vec3) -> Real {
-        let below = self.lo - p;
-        let above = p - self.hi;
-        below.sup(&above).sup(&Vec3::zeros()).norm_squared()
+    /// Squared distance from `p` to the box (0 inside): each axis's gap, squared and
+    /// summed x, y, z, so for a point box it is the exact squared distance to the point.
+    /// The hot loop of every search, written out: the maxima are comparisons, not
+    /// `f64::max` (whose NaN rule costs instructions), the same for the finite
+    /// coordinates the indices hold (a signed zero squares to the same 0).
+    #[inline]
+    pub(crate) fn distance_sq(&self, p: &Vec3) -> Real {
+        let gap = |a: usize| {
+            let (below, above) = (self.lo[a] - p[a], p[a] - self.hi[a]);
+            let g = if below > above { below } else { above };
+            if g > 0.0 { g } else { 0.0 }
+        };
+        let (x, y, z) = (gap(0), gap(1), gap(2));
+        x * x + y * y + z * z
     }
 }
 

@@ -109,7 +109,8 @@ impl Grid {
 
     /// Per axis, the first and last cell overlapping `[lo, hi]`.
     fn cell_range(&self, lo: &Vec3, hi: &Vec3) -> [(usize, usize); 3] {
-        [0, 1, 2].map(|a| (self.cell_of(lo[a], a), self.cell_of(hi[a], a)))
+        let axis = |a: usize| (self.cell_of(lo[a], a), self.cell_of(hi[a], a));
+        [axis(0), axis(1), axis(2)]
     }
 
     fn for_cells(&self, range: &[(usize, usize); 3], mut f: impl FnMut(usize)) {
@@ -141,9 +142,8 @@ impl Grid {
         }
         let scan = |c: usize, best: &mut (u32, Real)| {
             let (start, end) = (self.starts[c] as usize, self.starts[c + 1] as usize);
-            for k in start..end {
-                let prim = self.entries[k];
-                let box_d = box_distance_sq(&self.boxes[prim as usize], p);
+            for &prim in &self.entries[start..end] {
+                let box_d = self.boxes[prim as usize].distance_sq(p);
                 // Strictly farther than the best: it can neither win nor tie.
                 if box_d > best.1 {
                     continue;
@@ -156,7 +156,7 @@ impl Grid {
         };
         // The cell holding `p` first: it usually holds the answer, and the bound it
         // leaves decides how many neighbours must be looked at.
-        let own = [0, 1, 2].map(|a| self.cell_of(p[a], a));
+        let own = [self.cell_of(p[0], 0), self.cell_of(p[1], 1), self.cell_of(p[2], 2)];
         let own_cell = (own[2] * self.dims[1] + own[1]) * self.dims[0] + own[0];
         scan(own_cell, &mut best);
         // The cube holds every box within the bound: widened relatively and absolutely,
@@ -177,7 +177,9 @@ impl Grid {
         let cell = 1.0 / self.inv_cell;
         let gap = |axis: usize, i: usize| {
             let lo = self.origin[axis] + i as Real * cell;
-            ((lo - p[axis]).max(p[axis] - (lo + cell)) - slack).max(0.0)
+            let (below, above) = (lo - p[axis], p[axis] - (lo + cell));
+            let g = if below > above { below } else { above } - slack;
+            if g > 0.0 { g } else { 0.0 }
         };
         for z in range[2].0..=range[2].1 {
             let gz = gap(2, z);
@@ -196,16 +198,6 @@ impl Grid {
         }
         Ok(best)
     }
-}
-
-/// `Aabb::distance_sq` written out per coordinate (the scan's inner loop): the same
-/// value bit for bit (each axis's gap, squared and summed x, y, z), so for a point box
-/// it is the exact squared distance to the point.
-#[inline]
-fn box_distance_sq(b: &Aabb, p: &Vec3) -> Real {
-    let gap = |a: usize| (b.lo[a] - p[a]).max(p[a] - b.hi[a]).max(0.0);
-    let (x, y, z) = (gap(0), gap(1), gap(2));
-    x * x + y * y + z * z
 }
 
 #[cfg(test)]
