@@ -413,16 +413,28 @@ impl Engine {
 
     /// The neighbours of `v` with a higher index, ascending, in `upper`. A vertex has
     /// few neighbours: insertion into a sorted run beats collecting, sorting and
-    /// deduplicating.
+    /// deduplicating, and the run is short enough that a linear scan from its end finds
+    /// the place (`Vec::insert` and a binary search cost a `memmove` call and a loop
+    /// each).
     fn upper_neighbours<'a>(&self, v: u32, upper: &'a mut Vec<u32>) -> &'a [u32] {
         upper.clear();
         for &f in self.lists.of(v) {
             for x in self.lists.face(f) {
-                if x > v
-                    && let Err(at) = upper.binary_search(&x)
-                {
-                    upper.insert(at, x);
+                if x <= v {
+                    continue;
                 }
+                let mut at = upper.len();
+                while at > 0 && upper[at - 1] > x {
+                    at -= 1;
+                }
+                if at > 0 && upper[at - 1] == x {
+                    continue;
+                }
+                upper.push(x);
+                for i in (at..upper.len() - 1).rev() {
+                    upper[i + 1] = upper[i];
+                }
+                upper[at] = x;
             }
         }
         upper
