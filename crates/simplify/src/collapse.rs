@@ -238,8 +238,8 @@ pub(crate) struct Engine {
     pub(crate) flags: Vec<u8>,
     /// The current seam edges, when the input has seams.
     pub(crate) seams: Option<SeamGraph>,
-    /// The pass in which each slot's set of neighbours last changed (0: never): its
-    /// edges listed by earlier passes are stale.
+    /// The pass in which each slot's set of higher neighbours (its edges) last changed
+    /// (0: never): its edges listed by earlier passes are stale.
     touched_in_pass: Vec<u32>,
     /// Slots changed in the current pass (`== pass`): their edges wait for the next.
     changed_in_pass: Vec<u32>,
@@ -527,12 +527,18 @@ impl Engine {
     /// are re-pointed to `keep`, the quadrics add up and `keep` moves.
     fn collapse_edge(&mut self, c: &Candidate) {
         let (r, k) = (c.remove, c.keep);
-        // Every vertex around `remove` gains `keep` or loses `remove` as a neighbour.
+        // Every vertex around `remove` gains `keep` or loses `remove` as a neighbour, and
+        // `keep` gains `remove`'s neighbours. A slot's edges are only those to higher
+        // slots, so only `keep` and the vertices below `remove` or `keep` change theirs.
+        let changes_edges = r.max(k);
         for &f in self.lists.of(r) {
             for x in self.lists.face(f) {
-                self.touched_in_pass[x as usize] = self.pass;
+                if x < changes_edges {
+                    self.touched_in_pass[x as usize] = self.pass;
+                }
             }
         }
+        self.touched_in_pass[k as usize] = self.pass;
         self.lists.collapse(r, k);
         if let Some(seams) = &mut self.seams {
             seams.collapse(r, k);
