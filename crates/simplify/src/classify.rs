@@ -171,8 +171,18 @@ fn fill_vertex_quadrics(
 ) {
     let label_of = |x: u32| input.part_labels.map(|l| l[x as usize]);
     let my_faces = input.lists.of(v);
+    let constrained = constraints.boundary.is_some() || constraints.part_border.is_some() || constraints.seam;
     for (pose, positions) in input.poses.iter().enumerate() {
         let mut q = Quadric::default();
+        // Most vertices have no constraint plane: their quadric is the sum of their
+        // faces' (the same sum, in the same order, as the loop below makes).
+        if let Some(planes) = input.face_planes.filter(|_| pose == 0 && !constrained) {
+            for &f in my_faces {
+                q += &planes[f as usize].quadric();
+            }
+            out[pose] = q;
+            continue;
+        }
         let pv = &positions[v as usize];
         for &f in my_faces {
             let face = input.lists.face(f);
@@ -181,7 +191,7 @@ fn fill_vertex_quadrics(
                 Some(planes) if pose == 0 => q += &planes[f as usize].quadric(),
                 _ => q += &Quadric::from_triangle(&p0, &p1, &p2),
             }
-            if constraints.boundary.is_none() && constraints.part_border.is_none() && !constraints.seam {
+            if !constrained {
                 continue;
             }
             let cross = (p1 - p0).cross(&(p2 - p0));
