@@ -9,7 +9,7 @@ use desal_mesh::Vec3;
 
 use crate::classify::{BOUNDARY, PINNED, SEAM};
 use crate::collapse::{Candidate, Engine};
-use crate::marks::ScratchMarks;
+use crate::marks::{Epoch, ScratchMarks};
 use crate::report::Refusal;
 
 /// A new face with `2·area < DEGENERATE_RATIO · (longest edge)²` counts as degenerate
@@ -79,12 +79,16 @@ impl Engine {
     /// would pinch); and no apex is left with a degenerate fan (a closed fan of three
     /// faces — the tetrahedron case — or a single boundary face).
     pub(crate) fn link_condition_holds(&self, a: u32, b: u32, marks: &mut ScratchMarks) -> bool {
-        let common = self.count_common_neighbours(a, b, marks);
-
+        // `a`'s neighbours are marked, and the faces on the edge found, in one walk of
+        // `a`'s faces.
+        let of_a = marks.fresh();
         let mut apexes = [0u32; 2];
         let mut shared = 0;
         for &f in self.lists.of(a) {
             let face = self.lists.face(f);
+            for x in face {
+                marks.insert(x, of_a);
+            }
             if face.contains(&b) {
                 if shared == 2 {
                     return false;
@@ -93,7 +97,7 @@ impl Engine {
                 shared += 1;
             }
         }
-        if shared == 0 || common != shared {
+        if shared == 0 || self.count_common_neighbours(a, b, of_a, marks) != shared {
             return false;
         }
         let boundary = |v: u32| self.flags[v as usize] & BOUNDARY != 0;
@@ -106,14 +110,9 @@ impl Engine {
         })
     }
 
-    /// The number of vertices adjacent to both `a` and `b`.
-    fn count_common_neighbours(&self, a: u32, b: u32, marks: &mut ScratchMarks) -> usize {
-        let of_a = marks.fresh();
-        for &f in self.lists.of(a) {
-            for x in self.lists.face(f) {
-                marks.insert(x, of_a);
-            }
-        }
+    /// The number of vertices adjacent to both `a` and `b`, `of_a` the set of `a`'s
+    /// neighbours (and `a`).
+    fn count_common_neighbours(&self, a: u32, b: u32, of_a: Epoch, marks: &mut ScratchMarks) -> usize {
         let counted = marks.fresh();
         let mut common = 0;
         for &f in self.lists.of(b) {
