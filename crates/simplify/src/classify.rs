@@ -45,7 +45,7 @@ pub(crate) fn fill_face_planes(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<Fa
     faces
         .par_iter()
         .map(|f| {
-            let [a, b, c] = f.map(|v| positions[v as usize]);
+            let [a, b, c] = corners(f, positions);
             FacePlane::of_triangle(&a, &b, &c)
         })
         .collect()
@@ -58,7 +58,7 @@ pub(crate) fn compute_input_normals(faces: &[[u32; 3]], positions: &[Vec3]) -> V
     faces
         .par_iter()
         .map(|f| {
-            let [a, b, c] = f.map(|v| positions[v as usize]);
+            let [a, b, c] = corners(f, positions);
             (b - a).cross(&(c - a))
         })
         .collect()
@@ -272,6 +272,13 @@ impl Link {
         }
         i
     }
+}
+
+/// The positions of the corners of `face`. Written out: `face.map(..)` was not inlined
+/// into the per-face closures (a call and its array copies per face).
+#[inline]
+fn corners(face: &[u32; 3], positions: &[Vec3]) -> [Vec3; 3] {
+    [positions[face[0] as usize], positions[face[1] as usize], positions[face[2] as usize]]
 }
 
 /// The two vertices of `face` other than `v`, in face order after `v`.
