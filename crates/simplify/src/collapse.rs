@@ -431,10 +431,12 @@ impl Engine {
                     continue;
                 }
                 upper.push(x);
-                for i in (at..upper.len() - 1).rev() {
-                    upper[i + 1] = upper[i];
+                // On a slice: through the `Vec` its length is read again at every step.
+                let run = upper.as_mut_slice();
+                for i in (at + 1..run.len()).rev() {
+                    run[i] = run[i - 1];
                 }
-                upper[at] = x;
+                run[at] = x;
             }
         }
         upper
