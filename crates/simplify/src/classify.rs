@@ -131,13 +131,19 @@ struct Constraints {
 /// seam, `SEAM` or `PINNED` (see the module doc).
 fn classify_vertex(input: &ClassifyInput<'_>, link: &Link, v: u32) -> (u8, Constraints) {
     let config = input.config;
-    let fans = link.neighbours.iter().enumerate().filter(|&(i, x)| x.parent as usize == i).count();
+    // The fans (union-find roots), the boundary edges (one face) and the non-manifold
+    // ones (more than two) counted in one walk of the link.
+    let (mut fans, mut on_boundary, mut non_manifold) = (0, false, false);
+    for (i, x) in link.neighbours.iter().enumerate() {
+        fans += usize::from(x.parent as usize == i);
+        on_boundary |= x.faces == 1;
+        non_manifold |= x.faces > 2;
+    }
     let mut flags = if input.lists.of(v).is_empty() { 0 } else { ALIVE };
-    let on_boundary = link.neighbours.iter().any(|x| x.faces == 1);
     if on_boundary {
         flags |= BOUNDARY;
     }
-    if fans > 1 || link.neighbours.iter().any(|x| x.faces > 2) {
+    if fans > 1 || non_manifold {
         flags |= FROZEN;
     }
     let label_of = |x: u32| input.part_labels.map(|l| l[x as usize]);
