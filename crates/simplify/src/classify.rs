@@ -247,10 +247,12 @@ impl Link {
         for &f in lists.of(v) {
             let [x, y] = others(lists.face(f), v);
             let (i, j) = (self.slot(x), self.slot(y));
-            self.neighbours[i].faces += 1;
-            self.neighbours[j].faces += 1;
-            let (ri, rj) = (self.root(i), self.root(j));
-            self.neighbours[ri.max(rj)].parent = ri.min(rj) as u32;
+            // On a slice: through the `Vec` its length is read again at every index.
+            let n = self.neighbours.as_mut_slice();
+            n[i].faces += 1;
+            n[j].faces += 1;
+            let (ri, rj) = (root(n, i), root(n, j));
+            n[ri.max(rj)].parent = ri.min(rj) as u32;
         }
     }
 
@@ -269,15 +271,16 @@ impl Link {
             }
         }
     }
+}
 
-    fn root(&mut self, mut i: usize) -> usize {
-        let n = &mut self.neighbours;
-        while n[i].parent as usize != i {
-            n[i].parent = n[n[i].parent as usize].parent;
-            i = n[i].parent as usize;
-        }
-        i
+/// The union-find root of entry `i` of a link, halving the path on the way.
+#[inline]
+fn root(n: &mut [LinkNeighbour], mut i: usize) -> usize {
+    while n[i].parent as usize != i {
+        n[i].parent = n[n[i].parent as usize].parent;
+        i = n[i].parent as usize;
     }
+    i
 }
 
 /// The positions of the corners of `face`. Written out: `face.map(..)` was not inlined
