@@ -95,14 +95,17 @@ impl FaceLists {
         let (r, k) = (remove, keep);
         let mut dead = DeadFaces { count: 0, apexes: [u32::MAX; 2] };
         let (r_start, r_len) = (self.start[r as usize] as usize, self.len[r as usize] as usize);
-        for i in r_start..r_start + r_len {
-            let f = self.refs[i] as usize;
-            let face = &mut self.faces[f];
+        // The fields borrowed apart: through `self` every `Vec`'s pointer and length is
+        // read again after each write to a face.
+        let (refs, faces, alive) = (&self.refs[r_start..r_start + r_len], &mut self.faces, &mut self.alive);
+        for &f in refs {
+            let f = f as usize;
+            let face = &mut faces[f];
             if face.contains(&k) {
                 dead.apexes[dead.count] =
                     face.iter().copied().find(|&x| x != r && x != k).expect("three distinct");
                 dead.count += 1;
-                self.alive[f] = false;
+                alive[f] = false;
             } else {
                 for v in face.iter_mut() {
                     if *v == r {
@@ -143,15 +146,16 @@ impl FaceLists {
     fn drop_dead(&mut self, v: u32) {
         let s = self.start[v as usize] as usize;
         let len = self.len[v as usize] as usize;
-        let mut w = s;
-        for i in s..s + len {
-            let f = self.refs[i];
-            if self.alive[f as usize] {
-                self.refs[w] = f;
+        let (run, alive) = (&mut self.refs[s..s + len], &self.alive);
+        let mut w = 0;
+        for i in 0..run.len() {
+            let f = run[i];
+            if alive[f as usize] {
+                run[w] = f;
                 w += 1;
             }
         }
-        self.len[v as usize] = (w - s) as u32;
+        self.len[v as usize] = w as u32;
     }
 
     /// Copies every slot's run to the front, dropping abandoned runs.
