@@ -128,17 +128,16 @@ impl FaceLists {
             self.compact();
         }
         let start = self.refs.len();
+        // Both runs copied whole, then the dead faces dropped from the copy in place:
+        // pushing face by face read the `Vec` again at every one.
         for v in [keep, remove] {
             let s = self.start[v as usize] as usize;
-            for i in s..s + self.len[v as usize] as usize {
-                let f = self.refs[i];
-                if self.alive[f as usize] {
-                    self.refs.push(f);
-                }
-            }
+            self.refs.extend_from_within(s..s + self.len[v as usize] as usize);
         }
+        let live = keep_alive(&mut self.refs[start..], &self.alive);
+        self.refs.truncate(start + live);
         self.start[keep as usize] = start as u32;
-        self.len[keep as usize] = (self.refs.len() - start) as u32;
+        self.len[keep as usize] = live as u32;
         self.len[remove as usize] = 0;
     }
 
@@ -146,16 +145,7 @@ impl FaceLists {
     fn drop_dead(&mut self, v: u32) {
         let s = self.start[v as usize] as usize;
         let len = self.len[v as usize] as usize;
-        let (run, alive) = (&mut self.refs[s..s + len], &self.alive);
-        let mut w = 0;
-        for i in 0..run.len() {
-            let f = run[i];
-            if alive[f as usize] {
-                run[w] = f;
-                w += 1;
-            }
-        }
-        self.len[v as usize] = w as u32;
+        self.len[v as usize] = keep_alive(&mut self.refs[s..s + len], &self.alive) as u32;
     }
 
     /// Copies every slot's run to the front, dropping abandoned runs.
@@ -170,6 +160,22 @@ impl FaceLists {
         refs.reserve(self.refs_limit + 64 - refs.len());
         self.refs = refs;
     }
+}
+
+/// Moves the live faces of `run` to its front, in order; returns how many there are.
+/// On a slice, with `alive` borrowed apart from it: through `FaceLists` every `Vec` was
+/// read again after each write.
+#[inline]
+fn keep_alive(run: &mut [u32], alive: &[bool]) -> usize {
+    let mut live = 0;
+    for i in 0..run.len() {
+        let f = run[i];
+        if alive[f as usize] {
+            run[live] = f;
+            live += 1;
+        }
+    }
+    live
 }
 
 #[cfg(test)]
