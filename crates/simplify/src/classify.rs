@@ -45,7 +45,7 @@ pub(crate) fn fill_face_planes(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<Fa
     faces
         .par_iter()
         .map(|f| {
-            let [a, b, c] = f.map(|v| positions[v as usize]);
+            let [a, b, c] = corners(f, positions);
             FacePlane::of_triangle(&a, &b, &c)
         })
         .collect()
@@ -58,7 +58,7 @@ pub(crate) fn compute_input_normals(faces: &[[u32; 3]], positions: &[Vec3]) -> V
     faces
         .par_iter()
         .map(|f| {
-            let [a, b, c] = f.map(|v| positions[v as usize]);
+            let [a, b, c] = corners(f, positions);
             (b - a).cross(&(c - a))
         })
         .collect()
@@ -131,13 +131,19 @@ struct Constraints {
 /// seam, `SEAM` or `PINNED` (see the module doc).
 fn classify_vertex(input: &ClassifyInput<'_>, link: &Link, v: u32) -> (u8, Constraints) {
     let config = input.config;
-    let fans = link.neighbours.iter().enumerate().filter(|&(i, x)| x.parent as usize == i).count();
+    // The fans (union-find roots), the boundary edges (one face) and the non-manifold
+    // ones (more than two) counted in one walk of the link.
+    let (mut fans, mut on_boundary, mut non_manifold) = (0, false, false);
+    for (i, x) in link.neighbours.iter().enumerate() {
+        fans += usize::from(x.parent as usize == i);
+        on_boundary |= x.faces == 1;
+        non_manifold |= x.faces > 2;
+    }
     let mut flags = if input.lists.of(v).is_empty() { 0 } else { ALIVE };
-    let on_boundary = link.neighbours.iter().any(|x| x.faces == 1);
     if on_boundary {
         flags |= BOUNDARY;
     }
-    if fans > 1 || link.neighbours.iter().any(|x| x.faces > 2) {
+    if fans > 1 || non_manifold {
         flags |= FROZEN;
     }
     let label_of = |x: u32| input.part_labels.map(|l| l[x as usize]);
@@ -171,8 +177,18 @@ fn fill_vertex_quadrics(
 ) {
     let label_of = |x: u32| input.part_labels.map(|l| l[x as usize]);
     let my_faces = input.lists.of(v);
+    let constrained = constraints.boundary.is_some() || constraints.part_border.is_some() || constraints.seam;
     for (pose, positions) in input.poses.iter().enumerate() {
         let mut q = Quadric::default();
+        // Most vertices have no constraint plane: their quadric is the sum of their
+        // faces' (the same sum, in the same order, as the loop below makes).
+        if let Some(planes) = input.face_planes.filter(|_| pose == 0 && !constrained) {
+            for &f in my_faces {
+                q += &planes[f as usize].quadric();
+            }
+            out[pose] = q;
+            continue;
+        }
         let pv = &positions[v as usize];
         for &f in my_faces {
             let face = input.lists.face(f);
@@ -181,7 +197,7 @@ fn fill_vertex_quadrics(
                 Some(planes) if pose == 0 => q += &planes[f as usize].quadric(),
                 _ => q += &Quadric::from_triangle(&p0, &p1, &p2),
             }
-            if constraints.boundary.is_none() && constraints.part_border.is_none() && !constraints.seam {
+            if !constrained {
                 continue;
             }
             let cross = (p1 - p0).cross(&(p2 - p0));
@@ -231,10 +247,12 @@ impl Link {
         for &f in lists.of(v) {
             let [x, y] = others(lists.face(f), v);
             let (i, j) = (self.slot(x), self.slot(y));
-            self.neighbours[i].faces += 1;
-            self.neighbours[j].faces += 1;
-            let (ri, rj) = (self.root(i), self.root(j));
-            self.neighbours[ri.max(rj)].parent = ri.min(rj) as u32;
+            // On a slice: through the `Vec` its length is read again at every index.
+            let n = self.neighbours.as_mut_slice();
+            n[i].faces += 1;
+            n[j].faces += 1;
+            let (ri, rj) = (root(n, i), root(n, j));
+            n[ri.max(rj)].parent = ri.min(rj) as u32;
         }
     }
 
@@ -253,15 +271,23 @@ impl Link {
             }
         }
     }
+}
 
-    fn root(&mut self, mut i: usize) -> usize {
-        let n = &mut self.neighbours;
-        while n[i].parent as usize != i {
-            n[i].parent = n[n[i].parent as usize].parent;
-            i = n[i].parent as usize;
-        }
-        i
+/// The union-find root of entry `i` of a link, halving the path on the way.
+#[inline]
+fn root(n: &mut [LinkNeighbour], mut i: usize) -> usize {
+    while n[i].parent as usize != i {
+        n[i].parent = n[n[i].parent as usize].parent;
+        i = n[i].parent as usize;
     }
+    i
+}
+
+/// The positions of the corners of `face`. Written out: `face.map(..)` was not inlined
+/// into the per-face closures (a call and its array copies per face).
+#[inline]
+fn corners(face: &[u32; 3], positions: &[Vec3]) -> [Vec3; 3] {
+    [positions[face[0] as usize], positions[face[1] as usize], positions[face[2] as usize]]
 }
 
 /// The two vertices of `face` other than `v`, in face order after `v`.

@@ -95,14 +95,17 @@ impl FaceLists {
         let (r, k) = (remove, keep);
         let mut dead = DeadFaces { count: 0, apexes: [u32::MAX; 2] };
         let (r_start, r_len) = (self.start[r as usize] as usize, self.len[r as usize] as usize);
-        for i in r_start..r_start + r_len {
-            let f = self.refs[i] as usize;
-            let face = &mut self.faces[f];
+        // The fields borrowed apart: through `self` every `Vec`'s pointer and length is
+        // read again after each write to a face.
+        let (refs, faces, alive) = (&self.refs[r_start..r_start + r_len], &mut self.faces, &mut self.alive);
+        for &f in refs {
+            let f = f as usize;
+            let face = &mut faces[f];
             if face.contains(&k) {
                 dead.apexes[dead.count] =
                     face.iter().copied().find(|&x| x != r && x != k).expect("three distinct");
                 dead.count += 1;
-                self.alive[f] = false;
+                alive[f] = false;
             } else {
                 for v in face.iter_mut() {
                     if *v == r {
@@ -125,17 +128,16 @@ impl FaceLists {
             self.compact();
         }
         let start = self.refs.len();
+        // Both runs copied whole, then the dead faces dropped from the copy in place:
+        // pushing face by face read the `Vec` again at every one.
         for v in [keep, remove] {
             let s = self.start[v as usize] as usize;
-            for i in s..s + self.len[v as usize] as usize {
-                let f = self.refs[i];
-                if self.alive[f as usize] {
-                    self.refs.push(f);
-                }
-            }
+            self.refs.extend_from_within(s..s + self.len[v as usize] as usize);
         }
+        let live = keep_alive(&mut self.refs[start..], &self.alive);
+        self.refs.truncate(start + live);
         self.start[keep as usize] = start as u32;
-        self.len[keep as usize] = (self.refs.len() - start) as u32;
+        self.len[keep as usize] = live as u32;
         self.len[remove as usize] = 0;
     }
 
@@ -143,15 +145,7 @@ impl FaceLists {
     fn drop_dead(&mut self, v: u32) {
         let s = self.start[v as usize] as usize;
         let len = self.len[v as usize] as usize;
-        let mut w = s;
-        for i in s..s + len {
-            let f = self.refs[i];
-            if self.alive[f as usize] {
-                self.refs[w] = f;
-                w += 1;
-            }
-        }
-        self.len[v as usize] = (w - s) as u32;
+        self.len[v as usize] = keep_alive(&mut self.refs[s..s + len], &self.alive) as u32;
     }
 
     /// Copies every slot's run to the front, dropping abandoned runs.
@@ -166,6 +160,22 @@ impl FaceLists {
         refs.reserve(self.refs_limit + 64 - refs.len());
         self.refs = refs;
     }
+}
+
+/// Moves the live faces of `run` to its front, in order; returns how many there are.
+/// On a slice, with `alive` borrowed apart from it: through `FaceLists` every `Vec` was
+/// read again after each write.
+#[inline]
+fn keep_alive(run: &mut [u32], alive: &[bool]) -> usize {
+    let mut live = 0;
+    for i in 0..run.len() {
+        let f = run[i];
+        if alive[f as usize] {
+            run[live] = f;
+            live += 1;
+        }
+    }
+    live
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@ use desal_mesh::Vec3;
 
 use crate::classify::{BOUNDARY, PINNED, SEAM};
 use crate::collapse::{Candidate, Engine};
-use crate::marks::ScratchMarks;
+use crate::marks::{Epoch, ScratchMarks};
 use crate::report::Refusal;
 
 /// A new face with `2·area < DEGENERATE_RATIO · (longest edge)²` counts as degenerate
@@ -79,12 +79,16 @@ impl Engine {
     /// would pinch); and no apex is left with a degenerate fan (a closed fan of three
     /// faces — the tetrahedron case — or a single boundary face).
     pub(crate) fn link_condition_holds(&self, a: u32, b: u32, marks: &mut ScratchMarks) -> bool {
-        let common = self.count_common_neighbours(a, b, marks);
-
+        // `a`'s neighbours are marked, and the faces on the edge found, in one walk of
+        // `a`'s faces.
+        let of_a = marks.fresh();
         let mut apexes = [0u32; 2];
         let mut shared = 0;
         for &f in self.lists.of(a) {
             let face = self.lists.face(f);
+            for x in face {
+                marks.insert(x, of_a);
+            }
             if face.contains(&b) {
                 if shared == 2 {
                     return false;
@@ -93,7 +97,7 @@ impl Engine {
                 shared += 1;
             }
         }
-        if shared == 0 || common != shared {
+        if shared == 0 || self.count_common_neighbours(a, b, of_a, marks) != shared {
             return false;
         }
         let boundary = |v: u32| self.flags[v as usize] & BOUNDARY != 0;
@@ -106,14 +110,9 @@ impl Engine {
         })
     }
 
-    /// The number of vertices adjacent to both `a` and `b`.
-    fn count_common_neighbours(&self, a: u32, b: u32, marks: &mut ScratchMarks) -> usize {
-        let of_a = marks.fresh();
-        for &f in self.lists.of(a) {
-            for x in self.lists.face(f) {
-                marks.insert(x, of_a);
-            }
-        }
+    /// The number of vertices adjacent to both `a` and `b`, `of_a` the set of `a`'s
+    /// neighbours (and `a`).
+    fn count_common_neighbours(&self, a: u32, b: u32, of_a: Epoch, marks: &mut ScratchMarks) -> usize {
         let counted = marks.fresh();
         let mut common = 0;
         for &f in self.lists.of(b) {
@@ -137,15 +136,21 @@ impl Engine {
             if face.contains(&other) {
                 continue;
             }
-            let corners = face.map(|v| self.positions[v as usize]);
-            let old = (corners[1] - corners[0]).cross(&(corners[2] - corners[0]));
-            // `moved` is exactly one corner: the face is in its list, and has three.
+            let p = &self.positions;
+            let [c0, c1, c2] = [p[face[0] as usize], p[face[1] as usize], p[face[2] as usize]];
+            let old = (c1 - c0).cross(&(c2 - c0));
+            // `moved` is exactly one corner: the face is in its list, and has three. The
+            // substituted corners are chosen by a match, not written into an array at a
+            // runtime index (which kept every corner on the stack).
             let at = face.iter().position(|&v| v == moved).expect("a face of `moved`");
-            let mut new_corners = corners;
-            new_corners[at] = *position;
-            let e0 = new_corners[1] - new_corners[0];
-            let e1 = new_corners[2] - new_corners[0];
-            let e2 = new_corners[2] - new_corners[1];
+            let (n0, n1, n2) = match at {
+                0 => (*position, c1, c2),
+                1 => (c0, *position, c2),
+                _ => (c0, c1, *position),
+            };
+            let e0 = n1 - n0;
+            let e1 = n2 - n0;
+            let e2 = n2 - n1;
             let new = e0.cross(&e1);
             let longest_sq = e0.norm_squared().max(e1.norm_squared()).max(e2.norm_squared());
             let twice_area = new.norm();
@@ -166,9 +171,12 @@ impl Engine {
             // vertices (only the sign of a zero sum differs from starting at zero, and
             // the comparison below cannot see it).
             let n = &self.vertex_normals;
-            let mut normals = face.map(|v| n[v as usize]);
-            normals[at] += n[other as usize];
-            let reference = normals[0] + normals[1] + normals[2];
+            let [m0, m1, m2] = [n[face[0] as usize], n[face[1] as usize], n[face[2] as usize]];
+            let reference = match at {
+                0 => (m0 + n[other as usize]) + m1 + m2,
+                1 => m0 + (m1 + n[other as usize]) + m2,
+                _ => m0 + m1 + (m2 + n[other as usize]),
+            };
             if new.dot(&reference) <= self.params.cos_max_corner_normal * reference.norm() * twice_area {
                 return Err(Refusal::Fold);
             }
