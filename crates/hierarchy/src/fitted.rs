@@ -271,8 +271,8 @@ fn dot(a: &[Real], b: &[Real]) -> Real {
     let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
     let tail: Real = a4.remainder().iter().zip(b4.remainder()).map(|(x, y)| x * y).sum();
     for (x, y) in a4.zip(b4) {
-        // Fixed-size lanes (no bounds checks), which the compiler turns into vector
-        // arithmetic: the same four sums in the same order.
+        // Fixed-size lanes: no bounds checks in the loop, the same four sums in the
+        // same order.
         let (x, y): (&[Real; 4], &[Real; 4]) =
             (x.try_into().expect("a chunk of 4"), y.try_into().expect("a chunk of 4"));
         for k in 0..4 {
