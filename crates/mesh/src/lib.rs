@@ -22,7 +22,7 @@ pub use adjacency::{EdgeTopology, VertexFaces};
 pub use error::MeshError;
 pub use labels::PartLabels;
 pub use math::{Mat3, Real, Vec3};
-pub use mesh::{Face, TriMesh, edge_length_stats};
+pub use mesh::{Face, LengthStats, TriMesh, edge_length_stats};
 pub use pose_set::PoseSet;
 pub use progress::{NoProgress, Progress};
 pub use validate::{FaceCleanup, clean_faces, used_vertices};

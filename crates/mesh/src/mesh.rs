@@ -95,13 +95,35 @@ impl TriMesh {
 /// Mean and population variance of the lengths of the unique edges of `faces` over
 /// `positions` (see [`TriMesh::edge_length_stats`]).
 pub fn edge_length_stats(positions: &[Vec3], faces: &[Face]) -> (Real, Real) {
-    let topology = crate::EdgeTopology::new(faces);
-    let n = topology.edges.len();
-    if n == 0 {
-        return (0.0, 0.0);
+    let mut stats = LengthStats::default();
+    for &[a, b] in &crate::EdgeTopology::new(faces).edges {
+        stats.add((positions[a as usize] - positions[b as usize]).norm());
     }
-    let lengths = topology.edges.iter().map(|&[a, b]| (positions[a as usize] - positions[b as usize]).norm());
-    let (sum, sum_sq) = lengths.fold((0.0, 0.0), |(s, s2), l| (s + l, s2 + l * l));
-    let mean = sum / n as Real;
-    (mean, (sum_sq / n as Real - mean * mean).max(0.0))
+    stats.mean_variance()
+}
+
+/// Running sums of lengths, for [`edge_length_stats`] and for callers that walk the
+/// unique edges themselves (stage 3's report, from its own adjacency): lengths added in
+/// the same order give the same figures, bit for bit.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LengthStats {
+    count: usize,
+    sum: Real,
+    sum_sq: Real,
+}
+
+impl LengthStats {
+    pub fn add(&mut self, length: Real) {
+        self.count += 1;
+        (self.sum, self.sum_sq) = (self.sum + length, self.sum_sq + length * length);
+    }
+
+    /// Mean and population variance of the lengths added; `(0, 0)` without any.
+    pub fn mean_variance(&self) -> (Real, Real) {
+        if self.count == 0 {
+            return (0.0, 0.0);
+        }
+        let mean = self.sum / self.count as Real;
+        (mean, (self.sum_sq / self.count as Real - mean * mean).max(0.0))
+    }
 }

@@ -44,7 +44,7 @@ use crate::error::SimplifyError;
 use crate::face_lists::FaceLists;
 use crate::marks::ScratchMarks;
 use crate::quadric::Quadric;
-use crate::report::{Refusal, Refusals, SimplifyReport, StopReason, edge_length_stats_of_sums};
+use crate::report::{Refusal, Refusals, SimplifyReport, StopReason};
 use crate::seams::SeamGraph;
 use crate::types::{Simplified, SimplifyInput};
 
@@ -635,7 +635,7 @@ impl Engine {
     /// corner pair (2.5 % of a SCAPE run's instructions).
     fn output_edge_length_stats(&self, simp_of_slot: &[u32], positions: &[Vec3]) -> (f64, f64) {
         let mut upper = Vec::with_capacity(16);
-        let (mut count, mut sum, mut sum_sq) = (0usize, 0.0, 0.0);
+        let mut stats = desal_mesh::LengthStats::default();
         for v in 0..simp_of_slot.len() as u32 {
             let simp_v = simp_of_slot[v as usize];
             if simp_v == u32::MAX {
@@ -643,12 +643,10 @@ impl Engine {
             }
             for &x in self.upper_neighbours(v, &mut upper) {
                 let simp_x = simp_of_slot[x as usize] as usize;
-                let length = (positions[simp_v as usize] - positions[simp_x]).norm();
-                count += 1;
-                (sum, sum_sq) = (sum + length, sum_sq + length * length);
+                stats.add((positions[simp_v as usize] - positions[simp_x]).norm());
             }
         }
-        edge_length_stats_of_sums(count, sum, sum_sq)
+        stats.mean_variance()
     }
 }
 

@@ -119,15 +119,3 @@ impl fmt::Display for SimplifyReport {
         Ok(())
     }
 }
-
-/// Mean and population variance of `count` edge lengths from their sum and sum of
-/// squares: [`desal_mesh::edge_length_stats`]'s last step, written again because the
-/// engine sums the output's edges from its own lists (`Engine::output_edge_length_stats`
-/// asserts, in debug builds, that the two agree bit for bit).
-pub(crate) fn edge_length_stats_of_sums(count: usize, sum: f64, sum_sq: f64) -> (f64, f64) {
-    if count == 0 {
-        return (0.0, 0.0);
-    }
-    let mean = sum / count as f64;
-    (mean, (sum_sq / count as f64 - mean * mean).max(0.0))
-}
