@@ -8,7 +8,8 @@
 //! method's `simp_to_orig`). Per held-out fold of `desal eval`, U is built on the fold's
 //! training poses only (`desal_hierarchy::composed_upsamplers`, the hierarchy stage's
 //! path): COMA's barycentric U (template only, so one for all folds) and the fitted U
-//! (`stages::hierarchy::measured_fitted`). On each of the fold's test poses,
+//! (`stages::hierarchy::measured_fitted`), every fold's at once
+//! (`composed_upsamplers_per_mask`: the same rows up to rounding, a fifth of the sums). On each of the fold's test poses,
 //! `desal_hierarchy::upsampling_errors` measures, against the full-resolution pose, mean
 //! squared vertex distance and v2f (m²):
 //! - `ground_truth`: U · (the pose at `orig`), the upsampling error proper;
@@ -17,7 +18,8 @@
 use anyhow::{Context, Result};
 use desal_eval::SurfaceIndex;
 use desal_hierarchy::{
-    ChainLevel, Coarse, CsrMatrix, Upsampled, Upsampler, composed_upsamplers, upsampling_errors_indexed,
+    ChainLevel, Coarse, CsrMatrix, Upsampled, Upsampler, composed_upsamplers, composed_upsamplers_per_mask,
+    upsampling_errors_indexed,
 };
 use desal_mesh::{PoseSet, Vec3};
 use serde::Serialize;
@@ -85,11 +87,21 @@ pub fn measure(
         Ok(composed_upsamplers(full, &level, mask, up)?.pop().expect("one level"))
     };
     let barycentric = up(&all, &Upsampler::Barycentric).context("barycentric upsampler")?;
+    // Every fold's fitted U at once: they share their candidates and their sums over
+    // poses.
+    let masks: Vec<Vec<bool>> = folds
+        .iter()
+        .map(|test| {
+            let training = desal_eval::training_poses(full.pose_count(), test);
+            (0..full.pose_count()).map(|p| training.contains(&p)).collect()
+        })
+        .collect();
+    let mask_refs: Vec<&[bool]> = masks.iter().map(|m| m.as_slice()).collect();
+    let fitted_ups =
+        composed_upsamplers_per_mask(full, &level, &mask_refs, fitted).context("fitted upsampler")?;
     let mut per_pose = vec![PoseUpsamplers::default(); full.pose_count()];
-    for test in folds {
-        let training = desal_eval::training_poses(full.pose_count(), test);
-        let mask: Vec<bool> = (0..full.pose_count()).map(|p| training.contains(&p)).collect();
-        let fitted_up = up(&mask, fitted).context("fitted upsampler")?;
+    for (test, mut fitted_up) in folds.iter().zip(fitted_ups) {
+        let fitted_up = fitted_up.pop().expect("one level");
         let deformed_coarse: Vec<Vec<Vec3>> = test
             .iter()
             .map(|&p| deformed.held_out[p].clone().expect("every test pose is held out"))

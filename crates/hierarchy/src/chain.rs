@@ -9,7 +9,7 @@
 use desal_mesh::{Face, PoseSet};
 
 use crate::error::HierarchyError;
-use crate::level::{LevelInput, Upsampler, build_level, nest};
+use crate::level::{LevelInput, Upsampler, build_level_per_mask, nest};
 use crate::sparse::CsrMatrix;
 
 /// One level of a chain: its vertices as vertices of the level above (`map{k+1}`) and
@@ -47,17 +47,34 @@ pub fn level_poses(
 /// is `n_0 × n_{k+1}`), every level's U built with `upsampler` on the poses of `full`
 /// that `training` marks (one flag per pose).
 ///
-/// Errors: those of [`build_level`] for any level, an empty chain (`EmptyCoarse`).
+/// Errors: those of [`build_level`](crate::build_level) for any level, an empty chain
+/// (`EmptyCoarse`).
 pub fn composed_upsamplers(
     full: &PoseSet,
     chain: &[ChainLevel],
     training: &[bool],
     upsampler: &Upsampler,
 ) -> Result<Vec<CsrMatrix>, HierarchyError> {
+    Ok(composed_upsamplers_per_mask(full, chain, &[training], upsampler)?.pop().expect("one mask"))
+}
+
+/// [`composed_upsamplers`] once per training mask (`masks[k]` in place of `training`),
+/// in order: one chain per fold of a held-out evaluation. Each level's fits share their
+/// candidates and their sums over poses, so the folds cost about what one fit over every
+/// pose costs; each fold's U equals [`composed_upsamplers`]' up to the rounding of those
+/// sums (for one mask, bit for bit).
+///
+/// Errors: those of [`composed_upsamplers`] for any mask.
+pub fn composed_upsamplers_per_mask(
+    full: &PoseSet,
+    chain: &[ChainLevel],
+    masks: &[&[bool]],
+    upsampler: &Upsampler,
+) -> Result<Vec<Vec<CsrMatrix>>, HierarchyError> {
     if chain.is_empty() {
         return Err(HierarchyError::EmptyCoarse { vertices: 0, faces: 0 });
     }
-    let mut composed: Vec<CsrMatrix> = Vec::with_capacity(chain.len());
+    let mut composed: Vec<Vec<CsrMatrix>> = masks.iter().map(|_| Vec::with_capacity(chain.len())).collect();
     let mut fine_to_orig: Vec<u32> = (0..full.vertex_count() as u32).collect();
     let mut fine_faces: Vec<Face> = full.faces.clone();
     for level in chain {
@@ -66,13 +83,16 @@ pub fn composed_upsamplers(
             fine: &fine,
             coarse_to_fine: level.coarse_to_fine,
             coarse_faces: level.coarse_faces,
-            training,
+            training: masks.first().copied().unwrap_or(&[]),
         };
-        let up = build_level(&input, upsampler)?.up;
-        composed.push(match composed.last() {
-            None => up,
-            Some(c) => c.mul(&up)?,
-        });
+        for (chain_of_mask, built) in composed.iter_mut().zip(build_level_per_mask(&input, masks, upsampler)?)
+        {
+            let up = match chain_of_mask.last() {
+                None => built.up,
+                Some(c) => c.mul(&built.up)?,
+            };
+            chain_of_mask.push(up);
+        }
         fine_to_orig = nest(&fine_to_orig, level.coarse_to_fine);
         fine_faces = level.coarse_faces.to_vec();
     }

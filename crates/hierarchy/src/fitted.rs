@@ -95,7 +95,27 @@ pub fn fitted_rows(
     training: &[usize],
     config: &FittedConfig,
 ) -> (Vec<Row>, FitCounts) {
-    debug_assert!(!training.is_empty());
+    fitted_rows_per_training(fine, coarse_to_fine, barycentric, &[training], config)
+        .pop()
+        .expect("one training set")
+}
+
+/// [`fitted_rows`] for several training sets at once (`trainings[k]` in place of
+/// `training`, one result each, in order), as held-out evaluation needs one upsampler
+/// per fold. What does not depend on the poses is done once per fine vertex (its
+/// candidates), and each set's `DᵀD` is summed from partial sums over groups of poses
+/// (the poses that the same sets hold), each computed once: for the folds of a
+/// cross-validation that is the work of one fit over every pose instead of one per fold.
+/// A set's rows equal [`fitted_rows`]' on it up to the rounding of that sum (for one
+/// set, bit for bit).
+pub fn fitted_rows_per_training(
+    fine: &PoseSet,
+    coarse_to_fine: &[u32],
+    barycentric: &[Row],
+    trainings: &[&[usize]],
+    config: &FittedConfig,
+) -> Vec<(Vec<Row>, FitCounts)> {
+    debug_assert!(trainings.iter().all(|t| !t.is_empty()));
     let template = fine.template_positions();
     let coarse_template: Vec<Vec3> = coarse_to_fine.iter().map(|&f| template[f as usize]).collect();
     let search = match config.neighbourhood {
@@ -107,14 +127,15 @@ pub fn fitted_rows(
         fine_to_coarse[fine_idx as usize] = coarse_idx as u32;
     }
 
-    let trajectories = Trajectories::new(fine, training);
-    let solved: Vec<(Row, Solve)> = (0..fine.vertex_count())
+    let groups = PoseGroups::new(trainings);
+    let trajectories = Trajectories::new(fine, &groups.poses);
+    let solved: Vec<Vec<(Row, Solve)>> = (0..fine.vertex_count())
         .into_par_iter()
         .map_init(
             || Scratch::new(fine.vertex_count()),
             |scratch, fine_idx| {
                 if fine_to_coarse[fine_idx] != u32::MAX {
-                    return (vec![(fine_to_coarse[fine_idx], 1.0)], Solve::Exact);
+                    return vec![(vec![(fine_to_coarse[fine_idx], 1.0)], Solve::Exact); trainings.len()];
                 }
                 let nearest = match &search {
                     Search::Grid(grid) => grid
@@ -127,52 +148,95 @@ pub fn fitted_rows(
                     }
                 };
                 let candidates = candidates(nearest, &barycentric[fine_idx]);
-                fit_row(
-                    &trajectories,
-                    coarse_to_fine,
-                    fine_idx,
-                    &candidates,
-                    &barycentric[fine_idx],
-                    config.ridge,
-                )
+                let row = FineRow { fine_idx, candidates: &candidates, barycentric: &barycentric[fine_idx] };
+                fit_rows(&trajectories, &groups, coarse_to_fine, &row, config.ridge)
             },
         )
         .collect();
 
-    let mut counts = FitCounts::default();
-    let rows = solved
-        .into_iter()
-        .map(|(row, how)| {
+    let mut out: Vec<(Vec<Row>, FitCounts)> =
+        trainings.iter().map(|_| (Vec::with_capacity(solved.len()), FitCounts::default())).collect();
+    for per_set in solved {
+        for ((rows, counts), (row, how)) in out.iter_mut().zip(per_set) {
             match how {
                 Solve::Exact => counts.exact_rows += 1,
                 Solve::Cholesky => counts.cholesky_rows += 1,
                 Solve::PseudoInverse => counts.pseudo_inverse_rows += 1,
             }
-            row
-        })
-        .collect();
-    (rows, counts)
+            rows.push(row);
+        }
+    }
+    out
 }
 
-/// Every fine vertex's coordinates over the training poses, vertex-major
-/// (`[x, y, z]` per pose): a row's solve reads its candidates' blocks contiguously instead
-/// of striding across one array per pose.
+/// The poses of several training sets, grouped by which sets hold them: a set's `DᵀD`
+/// is the sum of its groups' partial sums. Poses keep the order in which the sets list
+/// them (first listing first), so one set is one group in its own order.
+struct PoseGroups {
+    /// Every listed pose once, group by group.
+    poses: Vec<usize>,
+    /// Group `g` is `poses[bounds[g]..bounds[g + 1]]`.
+    bounds: Vec<usize>,
+    /// Per training set: its groups, ascending, and its pose count.
+    members: Vec<(Vec<usize>, usize)>,
+}
+
+impl PoseGroups {
+    fn new(trainings: &[&[usize]]) -> Self {
+        let mut listed: Vec<usize> = Vec::new();
+        for &p in trainings.iter().flat_map(|t| t.iter()) {
+            if !listed.contains(&p) {
+                listed.push(p);
+            }
+        }
+        let holders = |p: usize| -> Vec<bool> { trainings.iter().map(|t| t.contains(&p)).collect() };
+        // Groups in the order of their first pose, each listing its poses in order.
+        let mut signatures: Vec<Vec<bool>> = Vec::new();
+        let mut grouped: Vec<Vec<usize>> = Vec::new();
+        for &p in &listed {
+            let signature = holders(p);
+            match signatures.iter().position(|s| *s == signature) {
+                Some(g) => grouped[g].push(p),
+                None => {
+                    signatures.push(signature);
+                    grouped.push(vec![p]);
+                }
+            }
+        }
+        let mut bounds = vec![0];
+        for g in &grouped {
+            bounds.push(bounds.last().expect("starts at 0") + g.len());
+        }
+        let members = (0..trainings.len())
+            .map(|set| {
+                let groups: Vec<usize> = (0..grouped.len()).filter(|&g| signatures[g][set]).collect();
+                let poses = groups.iter().map(|&g| grouped[g].len()).sum();
+                (groups, poses)
+            })
+            .collect();
+        Self { poses: grouped.concat(), bounds, members }
+    }
+}
+
+/// Every fine vertex's coordinates over the given poses, vertex-major (`[x, y, z]` per
+/// pose): a row's solve reads its candidates' blocks contiguously instead of striding
+/// across one array per pose.
 struct Trajectories {
     poses: usize,
     coords: Vec<Real>,
 }
 
 impl Trajectories {
-    fn new(fine: &PoseSet, training: &[usize]) -> Self {
-        let width = 3 * training.len();
+    fn new(fine: &PoseSet, poses: &[usize]) -> Self {
+        let width = 3 * poses.len();
         let mut coords = vec![0.0; fine.vertex_count() * width];
         coords.par_chunks_mut(width).enumerate().for_each(|(v, block)| {
-            for (slot, &p) in block.chunks_exact_mut(3).zip(training) {
+            for (slot, &p) in block.chunks_exact_mut(3).zip(poses) {
                 let q = fine.poses[p][v];
                 slot.copy_from_slice(&[q.x, q.y, q.z]);
             }
         });
-        Self { poses: training.len(), coords }
+        Self { poses: poses.len(), coords }
     }
 
     fn of(&self, vertex: usize) -> &[Real] {
@@ -201,64 +265,101 @@ fn candidates(mut c: Vec<u32>, barycentric: &Row) -> Vec<u32> {
     c
 }
 
-/// Solves one fine vertex's constrained ridge least squares (module docs).
-fn fit_row(
-    trajectories: &Trajectories,
-    coarse_to_fine: &[u32],
+/// One fine vertex to fit: its candidates (ascending `coarse_idx`) and barycentric row.
+struct FineRow<'a> {
     fine_idx: usize,
-    candidates: &[u32],
-    barycentric: &Row,
+    candidates: &'a [u32],
+    barycentric: &'a Row,
+}
+
+/// Solves one fine vertex's constrained ridge least squares (module docs) once per
+/// training set of `groups`, in order.
+fn fit_rows(
+    trajectories: &Trajectories,
+    groups: &PoseGroups,
+    coarse_to_fine: &[u32],
+    row: &FineRow,
     ridge: Real,
-) -> (Row, Solve) {
+) -> Vec<(Row, Solve)> {
+    let candidates = row.candidates;
     let m = candidates.len();
+    if m == 1 {
+        return vec![(vec![(candidates[0], 1.0)], Solve::Exact); groups.members.len()];
+    }
     let b = DenseVec::from_iterator(
         m,
-        candidates.iter().map(|j| barycentric.iter().find(|(c, _)| c == j).map_or(0.0, |&(_, w)| w)),
+        candidates.iter().map(|j| row.barycentric.iter().find(|(c, _)| c == j).map_or(0.0, |&(_, w)| w)),
     );
-    if m == 1 {
-        return (vec![(candidates[0], 1.0)], Solve::Exact);
-    }
 
     // G = (1/|P|) DᵀD, with D the 3|P| × m offsets of the candidates from the vertex
-    // over the training poses (column j: candidate j's trajectory minus the vertex's).
-    let own = trajectories.of(fine_idx);
-    let mut d = Dense::zeros(own.len(), m);
-    // Column-major storage: column j is one contiguous run (plain slices, which the
-    // compiler vectorises, where the matrix's column iterators cost ~20 instructions
-    // an entry).
-    for (column, &c) in d.as_mut_slice().chunks_exact_mut(own.len()).zip(candidates) {
+    // over the training poses (column j: candidate j's trajectory minus the vertex's),
+    // here over every group's poses, column by column: plain slices, which the compiler
+    // vectorises (the matrix's column iterators cost ~20 instructions an entry), and no
+    // zero fill first.
+    let own = trajectories.of(row.fine_idx);
+    let mut d: Vec<Real> = Vec::with_capacity(own.len() * m);
+    for &c in candidates {
         let theirs = trajectories.of(coarse_to_fine[c as usize] as usize);
-        for ((out, t), o) in column.iter_mut().zip(theirs).zip(own) {
-            *out = t - o;
-        }
+        d.extend(theirs.iter().zip(own).map(|(t, o)| t - o));
     }
-    let g = gram(&d, trajectories.poses as Real);
+    let columns: Vec<&[Real]> = d.chunks_exact(own.len()).collect();
+    let partial: Vec<Vec<Real>> =
+        groups.bounds.windows(2).map(|poses| upper_gram(&columns, 3 * poses[0]..3 * poses[1])).collect();
+    groups
+        .members
+        .iter()
+        .map(|(members, poses)| {
+            let g = summed_gram(&partial, members, m, *poses as Real);
+            solve_row(&g, &b, ridge, candidates)
+        })
+        .collect()
+}
+
+/// The row of `candidates` from `G` and the barycentric weights `b`.
+fn solve_row(g: &Dense, b: &DenseVec, ridge: Real, candidates: &[u32]) -> (Row, Solve) {
+    let m = candidates.len();
     let lambda = ridge * g.trace() / m as Real;
-    let w = match solve_kkt(&g, &b, lambda) {
+    let (w, how) = match solve_kkt(g, b, lambda) {
         Some(w) => (w, Solve::Cholesky),
         None => {
             let n = sum_free_basis(m);
-            let reduced = n.transpose() * &g * &n;
-            let rhs = -(n.transpose() * (&g * &b));
-            (&b + n * pseudo_inverse_solve(reduced, rhs, lambda), Solve::PseudoInverse)
+            let reduced = n.transpose() * g * &n;
+            let rhs = -(n.transpose() * (g * b));
+            (b + n * pseudo_inverse_solve(reduced, rhs, lambda), Solve::PseudoInverse)
         }
     };
-    let (w, how) = w;
     let row =
         candidates.iter().zip(w.iter()).filter(|&(_, &wj)| wj != 0.0).map(|(&j, &wj)| (j, wj)).collect();
     (row, how)
 }
 
-/// `DᵀD / scale`, upper half computed and mirrored, each entry a dot product of two
-/// contiguous columns with four accumulators (a fixed summation order, so the result
-/// does not depend on the machine's vector width).
-fn gram(d: &Dense, scale: Real) -> Dense {
-    let (rows, m) = d.shape();
-    let columns: Vec<&[Real]> = d.as_slice().chunks_exact(rows).collect();
+/// The upper half of `DᵀD` over the rows `rows` of `D`'s columns, row-major `m × m`
+/// (the lower half left 0): each entry a dot product of two contiguous runs with four
+/// accumulators (a fixed summation order, so the result does not depend on the
+/// machine's vector width).
+fn upper_gram(columns: &[&[Real]], rows: std::ops::Range<usize>) -> Vec<Real> {
+    let m = columns.len();
+    let mut g = vec![0.0; m * m];
+    for r in 0..m {
+        for c in r..m {
+            g[r * m + c] = dot(&columns[r][rows.clone()], &columns[c][rows.clone()]);
+        }
+    }
+    g
+}
+
+/// `(Σ_{g ∈ members} partial[g]) / scale`, mirrored: the groups summed in order, the
+/// first taken as it is (so one group is its own sum, bit for bit).
+fn summed_gram(partial: &[Vec<Real>], members: &[usize], m: usize, scale: Real) -> Dense {
     let mut g = Dense::zeros(m, m);
     for r in 0..m {
         for c in r..m {
-            let v = dot(columns[r], columns[c]) / scale;
+            let k = r * m + c;
+            let mut sum = partial[members[0]][k];
+            for &group in &members[1..] {
+                sum += partial[group][k];
+            }
+            let v = sum / scale;
             g[(r, c)] = v;
             g[(c, r)] = v;
         }

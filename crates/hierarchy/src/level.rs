@@ -6,9 +6,9 @@ use std::time::Instant;
 
 use desal_mesh::{Face, PoseSet, Real, TriMesh};
 
-use crate::barycentric::barycentric_rows;
+use crate::barycentric::{Row, barycentric_rows};
 use crate::error::HierarchyError;
-use crate::fitted::{FitCounts, FittedConfig, fitted_rows};
+use crate::fitted::{FitCounts, FittedConfig, fitted_rows_per_training};
 use crate::sparse::CsrMatrix;
 
 /// Which upsampler fills U.
@@ -114,11 +114,27 @@ pub struct LevelReport {
 /// coarse vertex count, an empty coarse level, a training mask of the wrong length, no
 /// training pose for the fitted upsampler, or an upsampler option out of range.
 pub fn build_level(input: &LevelInput, upsampler: &Upsampler) -> Result<Level, HierarchyError> {
+    Ok(build_level_per_mask(input, &[input.training], upsampler)?.pop().expect("one mask"))
+}
+
+/// [`build_level`] once per training mask, `masks[k]` in place of `input.training` (which
+/// is not read), one level each, in order: held-out evaluation's one level per fold. The
+/// fitted rows share their candidates and their sums over poses
+/// ([`crate::fitted::fitted_rows_per_training`]); each level's `seconds` is the time of
+/// building them all.
+pub(crate) fn build_level_per_mask(
+    input: &LevelInput,
+    masks: &[&[bool]],
+    upsampler: &Upsampler,
+) -> Result<Vec<Level>, HierarchyError> {
     let start = Instant::now();
     upsampler.validate()?;
-    check_input(input)?;
+    for &training in masks {
+        check_input(&LevelInput { training, ..*input })?;
+    }
     let fine = input.fine;
-    let training: Vec<usize> = (0..fine.pose_count()).filter(|&p| input.training[p]).collect();
+    let trainings: Vec<Vec<usize>> =
+        masks.iter().map(|mask| (0..fine.pose_count()).filter(|&p| mask[p]).collect()).collect();
 
     let down = selection(input.coarse_to_fine, fine.vertex_count())?;
     let template = fine.template_positions();
@@ -128,33 +144,43 @@ pub fn build_level(input: &LevelInput, upsampler: &Upsampler) -> Result<Level, H
     };
     let barycentric = barycentric_rows(&coarse_template, template);
     let n_coarse = input.coarse_to_fine.len();
-    let (rows, fit, training_poses) = match upsampler {
-        Upsampler::Barycentric => (barycentric, FitCounts::default(), 0),
+    let fits: Vec<(Vec<Row>, FitCounts, usize)> = match upsampler {
+        Upsampler::Barycentric => {
+            masks.iter().map(|_| (barycentric.clone(), FitCounts::default(), 0)).collect()
+        }
         Upsampler::Fitted(config) => {
-            if training.is_empty() {
+            if trainings.iter().any(|t| t.is_empty()) {
                 return Err(HierarchyError::NoTrainingPose);
             }
-            let (rows, counts) = fitted_rows(fine, input.coarse_to_fine, &barycentric, &training, config);
-            (rows, counts, training.len())
+            let sets: Vec<&[usize]> = trainings.iter().map(|t| t.as_slice()).collect();
+            fitted_rows_per_training(fine, input.coarse_to_fine, &barycentric, &sets, config)
+                .into_iter()
+                .zip(&trainings)
+                .map(|((rows, counts), training)| (rows, counts, training.len()))
+                .collect()
         }
     };
-    let up = CsrMatrix::from_rows(n_coarse, rows)?;
     let coarse_adjacency = adjacency(n_coarse, input.coarse_faces)?;
-
-    let up_max_row_sum_error = up.row_sums().iter().fold(0.0, |m: Real, s| m.max((s - 1.0).abs()));
-    let report = LevelReport {
-        upsampler: upsampler.name(),
-        fine_vertices: fine.vertex_count(),
-        coarse_vertices: n_coarse,
-        coarse_faces: input.coarse_faces.len(),
-        training_poses,
-        up_nnz: up.nnz(),
-        up_mean_row_nnz: up.nnz() as Real / up.rows.max(1) as Real,
-        up_max_row_sum_error,
-        fit,
-        seconds: start.elapsed().as_secs_f64(),
-    };
-    Ok(Level { down, up, coarse_adjacency, report })
+    let seconds = start.elapsed().as_secs_f64();
+    fits.into_iter()
+        .map(|(rows, fit, training_poses)| {
+            let up = CsrMatrix::from_rows(n_coarse, rows)?;
+            let up_max_row_sum_error = up.row_sums().iter().fold(0.0, |m: Real, s| m.max((s - 1.0).abs()));
+            let report = LevelReport {
+                upsampler: upsampler.name(),
+                fine_vertices: fine.vertex_count(),
+                coarse_vertices: n_coarse,
+                coarse_faces: input.coarse_faces.len(),
+                training_poses,
+                up_nnz: up.nnz(),
+                up_mean_row_nnz: up.nnz() as Real / up.rows.max(1) as Real,
+                up_max_row_sum_error,
+                fit,
+                seconds,
+            };
+            Ok(Level { down: down.clone(), up, coarse_adjacency: coarse_adjacency.clone(), report })
+        })
+        .collect()
 }
 
 fn check_input(input: &LevelInput) -> Result<(), HierarchyError> {

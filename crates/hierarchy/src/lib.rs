@@ -13,7 +13,8 @@
 //! - [`upsampling_error`] ([`measure`]): the composed U applied to the level-k ground
 //!   truth against the full-resolution pose, mean squared vertex distance and v2f, m².
 //! - [`composed_upsamplers`] ([`chain`]): every level's U of a chain refitted on a subset
-//!   of poses and composed to full resolution, for held-out measurement.
+//!   of poses and composed to full resolution, for held-out measurement;
+//!   [`composed_upsamplers_per_mask`] builds every fold's together, sharing their work.
 //! - [`CsrMatrix`] ([`sparse`]): the matrices, with a row-major COO export.
 //!
 //! Index spaces: `fine_idx` / `coarse_idx` within one step; `orig_idx` for level 0.
@@ -72,7 +73,7 @@ pub mod sparse;
 /// cache keys the hierarchy stage on it.
 pub const VERSION: u32 = 1;
 
-pub use chain::{ChainLevel, composed_upsamplers, level_poses};
+pub use chain::{ChainLevel, composed_upsamplers, composed_upsamplers_per_mask, level_poses};
 pub use error::HierarchyError;
 pub use fitted::{DEFAULT_NEIGHBOURS, DEFAULT_RIDGE, FitCounts, FittedConfig, Neighbourhood};
 pub use level::{Level, LevelInput, LevelReport, Upsampler, adjacency, build_level, nest, selection};

@@ -6,8 +6,8 @@
 use desal_eval::closest_point::point_triangle_distance_sq;
 use desal_hierarchy::barycentric::projection_row;
 use desal_hierarchy::{
-    FittedConfig, HierarchyError, LevelInput, Neighbourhood, Upsampler, adjacency, build_level, nest,
-    upsampling_error,
+    ChainLevel, CsrMatrix, FittedConfig, HierarchyError, LevelInput, Neighbourhood, Upsampler, adjacency,
+    build_level, composed_upsamplers, composed_upsamplers_per_mask, nest, upsampling_error,
 };
 use desal_mesh::{Face, Mat3, PoseSet, TriMesh, Vec3};
 use rand::{Rng, SeedableRng};
@@ -293,6 +293,56 @@ fn thread_count_does_not_change_the_result() {
         })
     };
     assert_eq!(run(1), run(2));
+}
+
+/// The folds' upsamplers built together (shared candidates, `DᵀD` summed from groups of
+/// poses) equal each fold's own to rounding, for overlapping and nested training sets,
+/// the geodesic neighbourhood and no ridge (the pseudo-inverse path) alike; a bad mask
+/// among them is refused as on its own.
+#[test]
+fn per_mask_upsamplers_equal_each_masks_own() {
+    let fine = bent_poses(&bumpy_grid(N), 7);
+    let (coarse, faces) = (grid_subset(N, 2), grid_faces(N, 2));
+    let chain = [ChainLevel { coarse_to_fine: &coarse, coarse_faces: &faces }];
+    let masks: Vec<Vec<bool>> = vec![
+        vec![true, false, true, true, false, true, true],
+        vec![true, true, false, true, true, false, true],
+        vec![true, true, true, false, false, true, true],
+        vec![true, false, false, false, false, false, true],
+    ];
+    let refs: Vec<&[bool]> = masks.iter().map(|m| m.as_slice()).collect();
+    let configs = [
+        FittedConfig::default(),
+        FittedConfig { neighbourhood: Neighbourhood::Geodesic, ..FittedConfig::default() },
+        FittedConfig { ridge: 0.0, ..FittedConfig::default() },
+    ];
+    for config in configs {
+        let up = Upsampler::Fitted(config);
+        let together = composed_upsamplers_per_mask(&fine, &chain, &refs, &up).unwrap();
+        assert_eq!(together.len(), masks.len());
+        for (mask, built) in masks.iter().zip(&together) {
+            let alone = composed_upsamplers(&fine, &chain, mask, &up).unwrap();
+            let (a, b) = (&alone[0], &built[0]);
+            assert_eq!((a.rows, a.cols, &a.row_ptr, &a.col_idx), (b.rows, b.cols, &b.row_ptr, &b.col_idx));
+            if config.ridge > 0.0 {
+                let worst = a.values.iter().zip(&b.values).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+                assert!(worst < 1e-10, "{config:?}, mask {mask:?}: differs by {worst:e}");
+            } else {
+                // No ridge: too few training poses leave the least squares rank deficient,
+                // and rounding may pick another of its minimisers; the fit is as good.
+                let training: Vec<usize> = (0..mask.len()).filter(|&p| mask[p]).collect();
+                let fit = |u: &CsrMatrix| upsampling_error(&fine, u, &coarse, &training).unwrap().mse;
+                let (fa, fb) = (fit(a), fit(b));
+                assert!((fa - fb).abs() <= 1e-6 * fa + 1e-15, "{config:?}, mask {mask:?}: {fa:e} vs {fb:e}");
+            }
+        }
+        // One mask: the same bits as building it alone.
+        let one = composed_upsamplers_per_mask(&fine, &chain, &refs[..1], &up).unwrap();
+        assert_eq!(one[0], composed_upsamplers(&fine, &chain, &masks[0], &up).unwrap());
+    }
+    let bad = [masks[0].as_slice(), &[true, true][..]];
+    let err = composed_upsamplers_per_mask(&fine, &chain, &bad, &Upsampler::default()).unwrap_err();
+    assert!(matches!(err, HierarchyError::MaskLength { mask: 2, poses: 7 }), "{err:?}");
 }
 
 #[test]
