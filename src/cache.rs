@@ -456,7 +456,12 @@ mod tests {
             let path = path.clone();
             std::thread::spawn(move || {
                 std::thread::sleep(Duration::from_millis(50));
-                fs::write(&path, b"stored again").unwrap();
+                // As the cache stores an entry: written aside, then renamed into place
+                // (a plain `fs::write` creates the file empty first, and a reader
+                // polling for it could read it then: CI once did).
+                let aside = path.with_extension("dsa.tmp");
+                fs::write(&aside, b"stored again").unwrap();
+                fs::rename(&aside, &path).unwrap();
             })
         };
         let read = read_entry_file_within(&path, Duration::from_secs(20), |p: &Path| fs::read(p));
