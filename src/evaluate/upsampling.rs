@@ -9,8 +9,8 @@
 //! training poses only (`desal_hierarchy::composed_upsamplers`, the hierarchy stage's
 //! path): COMA's barycentric U (template only, so one for all folds) and the fitted U
 //! (`stages::hierarchy::measured_fitted`), every fold's at once
-//! (`composed_upsamplers_per_mask`: the same rows up to rounding, a fifth of the sums). On each of the fold's test poses,
-//! `desal_hierarchy::upsampling_errors` measures, against the full-resolution pose, mean
+//! (`composed_upsamplers_per_mask`: the same rows up to rounding, a fifth of the sums).
+//! On each of the fold's test poses, `desal_hierarchy::upsampling_errors` measures, against the full-resolution pose, mean
 //! squared vertex distance and v2f (m²):
 //! - `ground_truth`: U · (the pose at `orig`), the upsampling error proper;
 //! - `deformed`: U · (the held-out deformed coarse pose of [`super::measure::deform`]).
@@ -83,10 +83,10 @@ pub fn measure(
     let orig = &set.mapped.map.simp_to_orig;
     let level = [ChainLevel { coarse_to_fine: orig, coarse_faces: &set.mapped.poses.faces }];
     let all = vec![true; full.pose_count()];
-    let up = |mask: &[bool], up: &Upsampler| -> Result<CsrMatrix> {
-        Ok(composed_upsamplers(full, &level, mask, up)?.pop().expect("one level"))
-    };
-    let barycentric = up(&all, &Upsampler::Barycentric).context("barycentric upsampler")?;
+    let barycentric: CsrMatrix = composed_upsamplers(full, &level, &all, &Upsampler::Barycentric)
+        .context("barycentric upsampler")?
+        .pop()
+        .expect("one level");
     // Every fold's fitted U at once: they share their candidates and their sums over
     // poses.
     let masks: Vec<Vec<bool>> = folds
