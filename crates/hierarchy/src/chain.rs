@@ -83,7 +83,8 @@ pub fn composed_upsamplers_per_mask(
             fine: &fine,
             coarse_to_fine: level.coarse_to_fine,
             coarse_faces: level.coarse_faces,
-            training: masks.first().copied().unwrap_or(&[]),
+            // Not read: `build_level_per_mask` takes each of `masks` in its place.
+            training: &[],
         };
         for (chain_of_mask, built) in composed.iter_mut().zip(build_level_per_mask(&input, masks, upsampler)?)
         {

@@ -85,29 +85,16 @@ pub struct FitCounts {
     pub pseudo_inverse_rows: usize,
 }
 
-/// Fits every fine vertex's row. `barycentric[i]` is fine vertex `i`'s barycentric row,
-/// `coarse_to_fine[coarse_idx]` its fine vertex, `training` the pose indices to fit on
-/// (non-empty). Rows are in `fine_idx` order, entries `(coarse_idx, weight)`.
-pub fn fitted_rows(
-    fine: &PoseSet,
-    coarse_to_fine: &[u32],
-    barycentric: &[Row],
-    training: &[usize],
-    config: &FittedConfig,
-) -> (Vec<Row>, FitCounts) {
-    fitted_rows_per_training(fine, coarse_to_fine, barycentric, &[training], config)
-        .pop()
-        .expect("one training set")
-}
-
-/// [`fitted_rows`] for several training sets at once (`trainings[k]` in place of
-/// `training`, one result each, in order), as held-out evaluation needs one upsampler
-/// per fold. What does not depend on the poses is done once per fine vertex (its
-/// candidates), and each set's `DᵀD` is summed from partial sums over groups of poses
-/// (the poses that the same sets hold), each computed once: for the folds of a
+/// Fits every fine vertex's row once per training set: `barycentric[i]` is fine vertex
+/// `i`'s barycentric row, `coarse_to_fine[coarse_idx]` its fine vertex, `trainings[k]`
+/// the pose indices of set `k` (each non-empty). One result per set, in order, its rows
+/// in `fine_idx` order with entries `(coarse_idx, weight)`. Held-out evaluation needs one
+/// upsampler per fold, so what does not depend on the poses is done once per fine vertex
+/// (its candidates), and each set's `DᵀD` is summed from partial sums over groups of
+/// poses (the poses that the same sets hold), each computed once: for the folds of a
 /// cross-validation that is the work of one fit over every pose instead of one per fold.
-/// A set's rows equal [`fitted_rows`]' on it up to the rounding of that sum (for one
-/// set, bit for bit).
+/// A set's rows equal those of a fit on that set alone up to the rounding of that sum
+/// (one set is one group: bit for bit).
 pub fn fitted_rows_per_training(
     fine: &PoseSet,
     coarse_to_fine: &[u32],

@@ -161,10 +161,14 @@ pub(crate) fn build_level_per_mask(
         }
     };
     let coarse_adjacency = adjacency(n_coarse, input.coarse_faces)?;
+    let ups: Vec<(CsrMatrix, FitCounts, usize)> = fits
+        .into_iter()
+        .map(|(rows, fit, training_poses)| Ok((CsrMatrix::from_rows(n_coarse, rows)?, fit, training_poses)))
+        .collect::<Result<_, HierarchyError>>()?;
     let seconds = start.elapsed().as_secs_f64();
-    fits.into_iter()
-        .map(|(rows, fit, training_poses)| {
-            let up = CsrMatrix::from_rows(n_coarse, rows)?;
+    Ok(ups
+        .into_iter()
+        .map(|(up, fit, training_poses)| {
             let up_max_row_sum_error = up.row_sums().iter().fold(0.0, |m: Real, s| m.max((s - 1.0).abs()));
             let report = LevelReport {
                 upsampler: upsampler.name(),
@@ -178,9 +182,9 @@ pub(crate) fn build_level_per_mask(
                 fit,
                 seconds,
             };
-            Ok(Level { down: down.clone(), up, coarse_adjacency: coarse_adjacency.clone(), report })
+            Level { down: down.clone(), up, coarse_adjacency: coarse_adjacency.clone(), report }
         })
-        .collect()
+        .collect())
 }
 
 fn check_input(input: &LevelInput) -> Result<(), HierarchyError> {
