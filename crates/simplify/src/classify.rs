@@ -131,13 +131,17 @@ struct Constraints {
 /// seam, `SEAM` or `PINNED` (see the module doc).
 fn classify_vertex(input: &ClassifyInput<'_>, link: &Link, v: u32) -> (u8, Constraints) {
     let config = input.config;
-    // The fans (union-find roots), the boundary edges (one face) and the non-manifold
-    // ones (more than two) counted in one walk of the link.
-    let (mut fans, mut on_boundary, mut non_manifold) = (0, false, false);
-    for (i, x) in link.neighbours.iter().enumerate() {
-        fans += usize::from(x.parent as usize == i);
-        on_boundary |= x.faces == 1;
-        non_manifold |= x.faces > 2;
+    // A closed fan is one fan with neither boundary nor non-manifold edges. Any other
+    // link has its fans (union-find roots), boundary edges (one face) and non-manifold
+    // ones (more than two) counted in one walk.
+    let (mut fans, mut on_boundary, mut non_manifold) = (1, false, false);
+    if !link.closed_fan {
+        fans = 0;
+        for (i, x) in link.neighbours.iter().enumerate() {
+            fans += usize::from(x.parent as usize == i);
+            on_boundary |= x.faces == 1;
+            non_manifold |= x.faces > 2;
+        }
     }
     let mut flags = if input.lists.of(v).is_empty() { 0 } else { ALIVE };
     if on_boundary {
@@ -231,6 +235,8 @@ struct Link {
     /// Scratch of [`Link::gather_closed_fan`]: the two other corners of each face, in
     /// face order after the vertex.
     corners: Vec<[u32; 2]>,
+    /// The faces are one closed fan ([`Link::gather_closed_fan`] found it).
+    closed_fan: bool,
 }
 
 /// One neighbour in a [`Link`].
@@ -247,7 +253,8 @@ impl Link {
     /// Rebuilds the link of `v` from its faces.
     fn gather(&mut self, lists: &FaceLists, v: u32) {
         self.neighbours.clear();
-        if self.gather_closed_fan(lists, v) {
+        self.closed_fan = self.gather_closed_fan(lists, v);
+        if self.closed_fan {
             return;
         }
         for &f in lists.of(v) {
