@@ -71,7 +71,8 @@ fn jittered_grid(rng: &mut ChaCha8Rng, side: usize, jitter: f64) -> TriMesh {
     let mut positions = Vec::new();
     for i in 0..side {
         for j in 0..side {
-            let mut r = || rng.gen_range(-jitter..jitter);
+            // Inclusive: a jitter of 0 (which proptest draws) is a plain grid.
+            let mut r = || rng.gen_range(-jitter..=jitter);
             positions.push(Vec3::new(
                 i as f64 * 0.1 + r(),
                 j as f64 * 0.1 + r(),

@@ -134,15 +134,17 @@ fn classify_vertex(input: &ClassifyInput<'_>, link: &Link, v: u32) -> (u8, Const
     // A closed fan is one fan with neither boundary nor non-manifold edges. Any other
     // link has its fans (union-find roots), boundary edges (one face) and non-manifold
     // ones (more than two) counted in one walk.
-    let (mut fans, mut on_boundary, mut non_manifold) = (1, false, false);
-    if !link.closed_fan {
-        fans = 0;
+    let (fans, on_boundary, non_manifold) = if link.closed_fan {
+        (1, false, false)
+    } else {
+        let (mut fans, mut on_boundary, mut non_manifold) = (0, false, false);
         for (i, x) in link.neighbours.iter().enumerate() {
             fans += usize::from(x.parent as usize == i);
             on_boundary |= x.faces == 1;
             non_manifold |= x.faces > 2;
         }
-    }
+        (fans, on_boundary, non_manifold)
+    };
     let mut flags = if input.lists.of(v).is_empty() { 0 } else { ALIVE };
     if on_boundary {
         flags |= BOUNDARY;
