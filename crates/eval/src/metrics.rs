@@ -63,7 +63,7 @@ impl SurfaceIndex {
     /// [`SurfaceIndex::new`] that also answers [`SurfaceIndex::distances_sq_near_vertices`]
     /// from each vertex's own faces: for a mesh many point sets are measured against,
     /// each point near a vertex of it (a full-resolution pose against its upsamplings
-    /// and deformations). The build costs about one unseeded query per vertex.
+    /// and deformations). The build costs about one seeded query per vertex.
     pub fn with_vertex_rings(mesh: &TriMesh) -> Self {
         let mut index = Self::new(mesh);
         let faces = VertexFaces::new(mesh.vertex_count(), &mesh.faces);
@@ -80,7 +80,18 @@ impl SurfaceIndex {
                 let other = |f: u32| {
                     if ring.binary_search(&f).is_ok() { Real::INFINITY } else { index.distance_sq(p, f) }
                 };
-                match index.bvh.nearest(p, other) {
+                // The search starts from a face of a neighbour that does not use `v`: it
+                // bounds the answer to about an edge, which the grid proves in a few
+                // cells (the tree's unseeded search cost a third more: 88 against 67 M
+                // instructions for a SCAPE pose's 12500 vertices).
+                let seed = ring
+                    .iter()
+                    .flat_map(|&f| mesh.faces[f as usize])
+                    .filter(|&u| u != v)
+                    .flat_map(|u| faces.of(u).iter().copied())
+                    .find(|f| ring.binary_search(f).is_err())
+                    .map(|f| (f, other(f)));
+                match grid_then_tree(index.grid.as_ref(), &index.bvh, p, seed, true, other) {
                     Some((_, d)) if d.is_finite() => (d.sqrt() * (1.0 - 1e-9) - margin).max(0.0),
                     Some(_) | None => Real::INFINITY,
                 }
@@ -414,4 +425,53 @@ pub fn vertex_errors(deformed: &TriMesh, target: &TriMesh) -> VertexErrors {
 /// Arithmetic mean, summed in order (NaN for an empty slice).
 pub fn mean(values: &[Real]) -> Real {
     values.iter().sum::<Real>() / values.len() as Real
+}
+
+#[cfg(test)]
+mod tests {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+
+    /// Each vertex's clearance is the distance to the nearest face not using it, found by
+    /// a search from a neighbour's face, bit for bit what a scan of every face gives:
+    /// for a bumpy sheet, a second sheet close above it, and faces off on their own.
+    #[test]
+    fn clearances_are_those_of_a_scan_of_every_face() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let side = 12u32;
+        let mut positions = Vec::new();
+        let mut faces = Vec::new();
+        for layer in 0..2 {
+            let base = positions.len() as u32;
+            for i in 0..side * side {
+                let (x, y) = (f64::from(i % side), f64::from(i / side));
+                positions.push(Vec3::new(x, y, 0.3 * f64::from(layer) + rng.gen_range(-0.2..0.2)) * 0.1);
+            }
+            for y in 0..side - 1 {
+                for x in 0..side - 1 {
+                    let v = base + y * side + x;
+                    faces.push([v, v + 1, v + side]);
+                    faces.push([v + 1, v + side + 1, v + side]);
+                }
+            }
+        }
+        let lone = positions.len() as u32;
+        positions.extend([Vec3::new(5.0, 5.0, 5.0), Vec3::new(5.1, 5.0, 5.0), Vec3::new(5.0, 5.1, 5.0)]);
+        faces.push([lone, lone + 1, lone + 2]);
+        let mesh = TriMesh { positions, faces };
+        let index = SurfaceIndex::with_vertex_rings(&mesh);
+        let rings = index.rings.as_ref().expect("built with rings");
+        let scale = mesh.positions.iter().map(|p| p.abs().max()).fold(0.0, Real::max);
+        let margin = 1e-12 * scale;
+        for (v, p) in mesh.positions.iter().enumerate() {
+            let nearest = (0..mesh.face_count() as u32)
+                .filter(|&f| !mesh.faces[f as usize].contains(&(v as u32)))
+                .map(|f| index.distance_sq(p, f))
+                .fold(Real::INFINITY, Real::min);
+            let want = (nearest.sqrt() * (1.0 - 1e-9) - margin).max(0.0);
+            assert_eq!(rings.clearance[v], want, "vertex {v}");
+        }
+    }
 }
