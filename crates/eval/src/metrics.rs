@@ -189,6 +189,19 @@ impl SurfaceIndex {
 
     fn near_vertex(&self, rings: &VertexRings, v: usize, p: &Vec3) -> Real {
         let ring = rings.faces.of(v as u32);
+        // Every other face is at least `clearance − δ` away; the bound is shrunk far
+        // beyond the rounding of `δ`, so a face it rules out is strictly farther than
+        // the ring's best and can neither win nor tie.
+        let delta = (p - rings.positions[v]).norm();
+        let bound = (rings.clearance[v] - delta) * (1.0 - 1e-9) - 1e-12 * p.abs().max();
+        if bound <= 0.0 {
+            // Nothing can be proved from the ring (a point farther from its vertex than
+            // the vertex is from the other faces: most of a deformation's points), so
+            // the ring's exact tests would only tighten the search's first bound, which
+            // costs more than it saves: the search from the vertex's first face.
+            let best = ring.first().map(|&f| (f, self.distance_sq(p, f)));
+            return self.nearest_from(p, best).map_or(Real::INFINITY, |(_, d)| d);
+        }
         let mut best: Option<(u32, Real)> = None;
         for &f in ring {
             let d = self.distance_sq(p, f);
@@ -196,15 +209,10 @@ impl SurfaceIndex {
                 best = Some((f, d));
             }
         }
-        if let Some((_, d)) = best {
-            // Every other face is at least `clearance − δ` away; the bound is shrunk
-            // far beyond the rounding of `δ`, so a face it rules out is strictly
-            // farther than `d` and can neither win nor tie.
-            let delta = (p - rings.positions[v]).norm();
-            let bound = (rings.clearance[v] - delta) * (1.0 - 1e-9) - 1e-12 * p.abs().max();
-            if bound > 0.0 && d < bound * bound {
-                return d;
-            }
+        if let Some((_, d)) = best
+            && d < bound * bound
+        {
+            return d;
         }
         // The search from the ring's best: a ring face can neither beat it nor tie with
         // a lower index, so none is tested again.
