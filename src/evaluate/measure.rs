@@ -236,6 +236,19 @@ impl<'a> Target<'a> {
     fn with_surface(mesh: TriMesh, surface: Cow<'a, SurfaceIndex>) -> Self {
         Self { vertices: VertexIndex::new(&mesh.positions), surface, mesh }
     }
+
+    /// The target of `mesh`, the same faces as this target's in another pose: both
+    /// indices refitted, not built (the same answers).
+    fn refit(&self, mesh: TriMesh) -> Target<'static> {
+        let surface = Cow::Owned(self.surface.refit(&mesh));
+        Target { vertices: self.vertices.refit(&mesh.positions), surface, mesh }
+    }
+
+    /// [`Target::with_surface`] for `mesh`, the same vertices as this target's in
+    /// another pose: its vertex index refitted, not built (the same answers).
+    fn with_surface_refitted<'b>(&self, mesh: TriMesh, surface: Cow<'b, SurfaceIndex>) -> Target<'b> {
+        Target { vertices: self.vertices.refit(&mesh.positions), surface, mesh }
+    }
 }
 
 /// Where each query of [`errors`] starts (see `SurfaceIndex::nearest_seeded`): any
@@ -311,10 +324,11 @@ struct RunSeeds {
 }
 
 impl RunSeeds {
-    fn new(full: &PoseSet, full_template: &Target, run: &Run) -> Self {
+    /// `coarse_template` is the target of `run`'s simplified template.
+    fn new(full: &PoseSet, full_template: &Target, run: &Run, coarse_template: &Target) -> Self {
         let coarse = run.simplified;
-        let template = coarse.template_mesh();
-        let coarse_surface = SurfaceIndex::new(&template);
+        let template = &coarse_template.mesh;
+        let coarse_surface = &coarse_template.surface;
         let nearest = |found: Option<(u32, f64)>| found.map_or(u32::MAX, |(i, _)| i);
         Self {
             coarse_faces: desal_eval::vertex_faces(&coarse.faces, coarse.vertex_count()),
@@ -366,20 +380,32 @@ pub fn measure_indexed(
     full_surfaces: Option<&[SurfaceIndex]>,
 ) -> Vec<Measured> {
     type PoseResult = Vec<(PoseErrors, PoseErrors, Vec<f64>)>;
-    let full_target = |pose: usize| match full_surfaces {
-        Some(s) => Target::with_surface(full.pose_mesh(pose), Cow::Borrowed(&s[pose])),
-        None => Target::new(full.pose_mesh(pose)),
+    let full_template = match full_surfaces {
+        Some(s) => Target::with_surface(full.pose_mesh(full.template), Cow::Borrowed(&s[full.template])),
+        None => Target::new(full.pose_mesh(full.template)),
     };
-    let full_template = full_target(full.template);
-    let seeds: Vec<RunSeeds> = runs.iter().map(|run| RunSeeds::new(full, &full_template, run)).collect();
+    // Every other pose's targets are the templates' indices refitted: the same answers
+    // for less than a build.
+    let full_target = |pose: usize| match full_surfaces {
+        Some(s) => full_template.with_surface_refitted(full.pose_mesh(pose), Cow::Borrowed(&s[pose])),
+        None => full_template.refit(full.pose_mesh(pose)),
+    };
+    let simplified_templates: Vec<Target> =
+        runs.iter().map(|run| Target::new(run.simplified.template_mesh())).collect();
+    let seeds: Vec<RunSeeds> = runs
+        .iter()
+        .zip(&simplified_templates)
+        .map(|(run, template)| RunSeeds::new(full, &full_template, run, template))
+        .collect();
     let per_pose: Vec<PoseResult> = evaluated
         .par_iter()
         .map(|&pose| {
             let full_target = full_target(pose);
             runs.iter()
                 .zip(&seeds)
-                .map(|(run, seeds)| {
-                    let simplified_target = Target::new(run.simplified.pose_mesh(pose));
+                .zip(&simplified_templates)
+                .map(|((run, seeds), template)| {
+                    let simplified_target = template.refit(run.simplified.pose_mesh(pose));
                     let faces = &run.simplified.faces;
                     let held_out =
                         run.deformed.held_out[pose].as_ref().expect("evaluated poses are held out once");

@@ -280,13 +280,17 @@ pub struct VertexIndex {
 
 impl VertexIndex {
     pub fn new(points: &[Vec3]) -> Self {
-        let boxes: Vec<Aabb> = points.iter().map(|p| Aabb { lo: *p, hi: *p }).collect();
-        // Cells of about the mean spacing of the points over their box's volume.
-        let bounds = Aabb::of_points(points);
-        let volume = (bounds.hi - bounds.lo).map(|e| e.max(Real::EPSILON)).product();
-        let spacing = (volume / points.len().max(1) as Real).cbrt();
-        let grid = Grid::build(&boxes, spacing);
-        Self { bvh: Bvh::build(&boxes), grid, points: points.to_vec() }
+        let boxes = point_boxes(points);
+        Self { bvh: Bvh::build(&boxes), grid: point_grid(points, &boxes), points: points.to_vec() }
+    }
+
+    /// The index of `points`, as many as the indexed ones (typically the same points
+    /// in another pose): this index's tree with every box recomputed, no build. Same
+    /// answers as `VertexIndex::new(points)`, and as fast while the points keep their
+    /// neighbours. Panics on another point count.
+    pub fn refit(&self, points: &[Vec3]) -> Self {
+        let boxes = point_boxes(points);
+        Self { bvh: self.bvh.refitted(&boxes), grid: point_grid(points, &boxes), points: points.to_vec() }
     }
 
     /// [`VertexIndex::nearest`] from a guess: `seed` is a point likely near `p` (for a
@@ -319,6 +323,20 @@ impl VertexIndex {
     pub fn distances_sq(&self, points: &[Vec3]) -> Vec<Real> {
         points.par_iter().map(|p| self.nearest(p).map_or(Real::INFINITY, |(_, d)| d)).collect()
     }
+}
+
+/// Each point as a box of its own.
+fn point_boxes(points: &[Vec3]) -> Vec<Aabb> {
+    points.iter().map(|p| Aabb { lo: *p, hi: *p }).collect()
+}
+
+/// The grid of a point cloud: cells of about the mean spacing of the points over their
+/// box's volume.
+fn point_grid(points: &[Vec3], boxes: &[Aabb]) -> Option<Grid> {
+    let bounds = Aabb::of_points(points);
+    let volume = (bounds.hi - bounds.lo).map(|e| e.max(Real::EPSILON)).product();
+    let spacing = (volume / points.len().max(1) as Real).cbrt();
+    Grid::build(boxes, spacing)
 }
 
 /// The two halves of v2f, each a mean of squared point-to-surface distances (m² for

@@ -170,6 +170,18 @@ proptest! {
             }
             prop_assert_eq!(refitted.distances_sq(&queries), one_at_a_time(&fresh, &queries));
         }
+        // A point cloud's index likewise (as many points: the grid's vertices moved, or
+        // scattered anywhere): the same nearest point, seeded or not.
+        let scattered: Vec<Vec3> =
+            (0..before.vertex_count()).map(|_| Vec3::new(rng.r#gen(), rng.r#gen(), rng.r#gen())).collect();
+        let built = VertexIndex::new(&before.positions);
+        for points in [&after.positions, &scattered] {
+            let (refitted, fresh) = (built.refit(points), VertexIndex::new(points));
+            for (i, q) in queries.iter().enumerate() {
+                prop_assert_eq!(refitted.nearest(q), fresh.nearest(q));
+                prop_assert_eq!(refitted.nearest_seeded(q, i as u32), fresh.nearest(q));
+            }
+        }
     }
 
     /// Issue 17: a seeded query (the grid from a near seed, the tree from a far or
