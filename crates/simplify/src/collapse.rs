@@ -348,11 +348,14 @@ impl Engine {
     }
 
     /// Pass, steps 1 and 2 (meshoptimizer's pick and rank) in one parallel sweep over
-    /// the slots: every live edge once, as `[lo, hi]` ascending, and its cost. A slot
-    /// whose neighbours did not change in the last pass copies its edges from
-    /// `previous`; an edge neither of whose endpoints changed copies its cost (the
-    /// quadric cost depends on the endpoints alone), so only the edges around the last
-    /// pass's collapses are listed and costed again.
+    /// the slots: every live edge once, as `[lo, hi]` ascending, and its cost. Slots
+    /// whose neighbours did not change in the last pass copy their edges and costs from
+    /// `previous`, a run of consecutive such slots in one copy (late passes change few
+    /// slots: a copy per slot cost more than the rest of their listing), and the costs
+    /// of their edges to a slot modified in it are computed again; a changed slot lists
+    /// its edges again, copying the cost of each edge neither of whose endpoints changed
+    /// (the quadric cost depends on the endpoints alone). So only the edges around the
+    /// last pass's collapses are listed and costed again.
     fn pick_and_rank_edge_collapses(&self, previous: EdgeCosts) -> EdgeCosts {
         let n = self.positions.len();
         // Changes made in the last pass are not in `previous`; earlier ones are.
@@ -379,32 +382,65 @@ impl Engine {
                     start: Vec::with_capacity(slots.len()),
                 };
                 let mut upper: Vec<u32> = Vec::with_capacity(16);
-                for v in slots {
-                    out.start.push(out.his.len() as u32);
-                    if self.flags[v as usize] & (ALIVE | FROZEN) != ALIVE {
-                        continue;
-                    }
-                    let (old_his, old_costs) = old.of(v as usize - chunk * CHUNK);
-                    if have_previous && self.touched_in_pass[v as usize] < last {
-                        debug_assert_eq!(self.upper_neighbours(v, &mut upper), old_his);
-                        out.his.extend_from_slice(old_his);
-                        for (&x, &cost) in old_his.iter().zip(old_costs) {
-                            out.costs.push(if reuse_costs && unchanged(v, x) {
-                                cost
-                            } else {
-                                self.cost_of(v, x)
-                            });
+                let touched = |v: u32| !have_previous || self.touched_in_pass[v as usize] >= last;
+                let mut v = slots.start;
+                while v < slots.end {
+                    if touched(v) {
+                        out.start.push(out.his.len() as u32);
+                        if self.flags[v as usize] & (ALIVE | FROZEN) == ALIVE {
+                            let (old_his, old_costs) = old.of((v - slots.start) as usize);
+                            for &x in self.upper_neighbours(v, &mut upper).iter() {
+                                let reused = match old_his.binary_search(&x) {
+                                    Ok(j) if reuse_costs && unchanged(v, x) => Some(old_costs[j]),
+                                    _ => None,
+                                };
+                                out.his.push(x);
+                                out.costs.push(reused.unwrap_or_else(|| self.cost_of(v, x)));
+                            }
                         }
+                        v += 1;
                         continue;
                     }
-                    for &x in self.upper_neighbours(v, &mut upper).iter() {
-                        let reused = match old_his.binary_search(&x) {
-                            Ok(j) if reuse_costs && unchanged(v, x) => Some(old_costs[j]),
-                            _ => None,
-                        };
-                        out.his.push(x);
-                        out.costs.push(reused.unwrap_or_else(|| self.cost_of(v, x)));
+                    // Slots `v..w`, untouched in the last pass, keep their edges: the runs
+                    // are copied whole, and only the costs of edges to a slot modified in
+                    // it are computed again.
+                    let mut w = v + 1;
+                    while w < slots.end && !touched(w) {
+                        w += 1;
                     }
+                    let (i, j) = ((v - slots.start) as usize, (w - slots.start) as usize);
+                    let from = old.start[i] as usize;
+                    let to = old.start.get(j).map_or(old.his.len(), |&e| e as usize);
+                    let base = out.his.len();
+                    out.start.extend(old.start[i..j].iter().map(|&s| (s as usize - from + base) as u32));
+                    out.his.extend_from_slice(&old.his[from..to]);
+                    out.costs.extend_from_slice(&old.costs[from..to]);
+                    let end = out.his.len();
+                    // The slot of edge `e`, found by a cursor that only moves forwards.
+                    let mut slot = i;
+                    for e in base..end {
+                        let x = out.his[e];
+                        if reuse_costs && self.modified_in_pass[x as usize] < last {
+                            continue;
+                        }
+                        while slot + 1 < j && out.start[slot + 1] as usize <= e {
+                            slot += 1;
+                        }
+                        out.costs[e] = self.cost_of(slots.start + slot as u32, x);
+                    }
+                    #[cfg(debug_assertions)]
+                    for u in v..w {
+                        let k = (u - slots.start) as usize;
+                        let run = out.start[k] as usize..out.start.get(k + 1).map_or(end, |&e| e as usize);
+                        // A slot untouched in the last pass was not modified in it either.
+                        debug_assert!(self.modified_in_pass[u as usize] < last);
+                        if self.flags[u as usize] & (ALIVE | FROZEN) == ALIVE {
+                            debug_assert_eq!(self.upper_neighbours(u, &mut upper), &out.his[run]);
+                        } else {
+                            debug_assert!(run.is_empty());
+                        }
+                    }
+                    v = w;
                 }
                 out
             })
@@ -542,6 +578,8 @@ impl Engine {
             }
         }
         self.touched_in_pass[k as usize] = self.pass;
+        // `remove` loses all its edges.
+        self.touched_in_pass[r as usize] = self.pass;
         self.lists.collapse(r, k);
         if let Some(seams) = &mut self.seams {
             seams.collapse(r, k);
