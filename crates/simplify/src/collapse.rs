@@ -499,24 +499,11 @@ impl Engine {
         match pass {
             Pass::Batched => {
                 let wanted = target.remaining(self).max(1);
-                let mut chosen = Vec::with_capacity(wanted.min(order.len()));
-                for [a, b] in order.map(unpack_edge) {
-                    if chosen.len() == wanted {
-                        break;
-                    }
-                    if self.changed_this_pass(a) || self.changed_this_pass(b) {
-                        continue;
-                    }
-                    // An edge the seam rule refuses both ways is refused before it holds its
-                    // endpoints for the pass: it would stay cheap, and block them in every one.
-                    if self.seams.is_some() && !self.seam_rule_allows_either(a, b) {
-                        self.refusals.count(Refusal::Seam);
-                        continue;
-                    }
-                    self.changed_in_pass[a as usize] = self.pass;
-                    self.changed_in_pass[b as usize] = self.pass;
-                    chosen.push(u64::from(a) << 32 | u64::from(b));
-                }
+                let mut chosen = if self.seams.is_some() {
+                    self.choose_in_cost_order(order, wanted)
+                } else {
+                    self.choose_by_rounds(order.keys, wanted, marks)
+                };
                 // `(lo, hi)` order: vertex order. Packed into one integer, which orders
                 // like the pair and compares in one instruction where a pair takes a
                 // lexicographic loop.
@@ -543,6 +530,104 @@ impl Engine {
                 }
             }
         }
+    }
+
+    /// A batched pass's choice: in cost order, up to `wanted` edges sharing no endpoint
+    /// (each chosen edge holds its endpoints for the pass), packed `lo << 32 | hi`.
+    fn choose_in_cost_order(&mut self, order: SortedCollapses, wanted: usize) -> Vec<u64> {
+        let mut chosen = Vec::with_capacity(wanted.min(order.len()));
+        for [a, b] in order.map(unpack_edge) {
+            if chosen.len() == wanted {
+                break;
+            }
+            if self.changed_this_pass(a) || self.changed_this_pass(b) {
+                continue;
+            }
+            // An edge the seam rule refuses both ways is refused before it holds its
+            // endpoints for the pass: it would stay cheap, and block them in every one.
+            if self.seams.is_some() && !self.seam_rule_allows_either(a, b) {
+                self.refusals.count(Refusal::Seam);
+                continue;
+            }
+            self.changed_in_pass[a as usize] = self.pass;
+            self.changed_in_pass[b as usize] = self.pass;
+            chosen.push(u64::from(a) << 32 | u64::from(b));
+        }
+        chosen
+    }
+
+    /// [`Self::choose_in_cost_order`]'s choice (without seams), found without sorting
+    /// every key. An edge whose key is the smallest at both its endpoints among the
+    /// edges still undecided is one the in-order choice takes (every smaller edge at
+    /// its endpoints was dropped because a smaller one took its other endpoint), and
+    /// an undecided edge at an endpoint it takes is one it skips; so rounds of taking
+    /// every such edge and dropping their neighbours decide the same edges as the
+    /// in-order walk. When a round decides few edges (a run of ever cheaper edges
+    /// decides one per round), the rest are sorted and walked in order. The walk
+    /// stops at `wanted` edges, so of all the edges taken, the `wanted` cheapest are
+    /// kept. `marks` is scratch: each slot's smallest edge in a round.
+    fn choose_by_rounds(&mut self, mut keys: Vec<u128>, wanted: usize, marks: &mut ScratchMarks) -> Vec<u64> {
+        // `keys[..taken]` are taken, `keys[taken..end]` undecided.
+        let mut taken = 0;
+        let mut end = keys.len();
+        while end - taken > ROUNDS_MIN_EDGES {
+            let live = &mut keys[taken..end];
+            let base = marks.fresh_range(live.len());
+            for (i, &key) in live.iter().enumerate() {
+                let [a, b] = unpack_edge(key);
+                for v in [a, b] {
+                    let best = marks.get(v);
+                    if best < base || live[(best - base) as usize] > key {
+                        marks.set(v, base + i as u32);
+                    }
+                }
+            }
+            let mut took = 0;
+            for i in 0..live.len() {
+                let [a, b] = unpack_edge(live[i]);
+                let me = base + i as u32;
+                if marks.get(a) == me && marks.get(b) == me {
+                    self.changed_in_pass[a as usize] = self.pass;
+                    self.changed_in_pass[b as usize] = self.pass;
+                    // `live[took]` was seen already: the swap moves no edge still to be
+                    // looked at.
+                    live.swap(took, i);
+                    took += 1;
+                }
+            }
+            let mut kept = took;
+            for i in took..live.len() {
+                let [a, b] = unpack_edge(live[i]);
+                if !self.changed_this_pass(a) && !self.changed_this_pass(b) {
+                    live[kept] = live[i];
+                    kept += 1;
+                }
+            }
+            let decided = live.len() - (kept - took);
+            let before = live.len();
+            taken += took;
+            end = taken + (kept - took);
+            if decided * ROUNDS_MIN_DECIDED < before {
+                break;
+            }
+        }
+        keys[taken..end].sort_unstable();
+        let undecided = taken..end;
+        for i in undecided {
+            let [a, b] = unpack_edge(keys[i]);
+            if !self.changed_this_pass(a) && !self.changed_this_pass(b) {
+                self.changed_in_pass[a as usize] = self.pass;
+                self.changed_in_pass[b as usize] = self.pass;
+                keys.swap(taken, i);
+                taken += 1;
+            }
+        }
+        let taken = &mut keys[..taken];
+        if taken.len() > wanted {
+            taken.select_nth_unstable(wanted - 1);
+        }
+        // The low 64 bits of a key are `lo << 32 | hi`.
+        taken[..wanted.min(taken.len())].iter().map(|&key| key as u64).collect()
     }
 
     #[inline]
@@ -722,6 +807,13 @@ fn sort_edge_collapses(ranked: &EdgeCosts, needed: usize, pass: Pass) -> SortedC
     SortedCollapses { keys: order, sorted: 0, next: 0, batch: first_batch }
 }
 
+/// Below this many undecided edges, [`Engine::choose_by_rounds`] sorts them and walks them.
+const ROUNDS_MIN_EDGES: usize = 64;
+
+/// [`Engine::choose_by_rounds`] stops its rounds when one decides fewer than one in this
+/// many of the undecided edges.
+const ROUNDS_MIN_DECIDED: usize = 4;
+
 /// The first batch an exhaustive pass sorts; each later one is twice the last, so the
 /// selections that split the batches off cost a few sweeps of the order in all.
 const EXHAUSTIVE_FIRST_BATCH: usize = 1024;
@@ -838,6 +930,56 @@ fn from_total_order_key(key: u64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::SimplifyInput;
+
+    /// The choice by rounds takes exactly the edges the walk in cost order takes, for
+    /// scattered costs with many ties, for costs rising along the slots (runs of ever
+    /// cheaper edges: few decided per round, so the sorted walk finishes), and for
+    /// every cap on the number taken.
+    #[test]
+    fn choice_by_rounds_is_the_choice_in_cost_order() {
+        let side = 24u32;
+        let positions =
+            (0..side * side).map(|i| Vec3::new(f64::from(i % side), f64::from(i / side), 0.0)).collect();
+        let mut faces = Vec::new();
+        for y in 0..side - 1 {
+            for x in 0..side - 1 {
+                let v = y * side + x;
+                faces.push([v, v + 1, v + side]);
+                faces.push([v + 1, v + side + 1, v + side]);
+            }
+        }
+        let mesh = TriMesh { positions, faces };
+        let input = SimplifyInput::new(&mesh);
+        let config = SimplifyConfig::default();
+        let mut engine = Engine::new(&[mesh.positions.as_slice()], 0, &input, mesh.faces.clone(), &config);
+        let mut marks = ScratchMarks::new(mesh.positions.len());
+        let mut upper = Vec::new();
+        let edges: Vec<[u32; 2]> = (0..side * side)
+            .flat_map(|v| {
+                engine.upper_neighbours(v, &mut upper).iter().map(move |&x| [v, x]).collect::<Vec<_>>()
+            })
+            .collect();
+        let costings: [&dyn Fn(usize, [u32; 2]) -> f64; 3] = [
+            &|i, _| ((i as u64 * 2_654_435_761) % 7) as f64,
+            &|_, [lo, hi]| f64::from(lo) + 0.5 * f64::from(hi % 3),
+            &|_, [lo, _]| f64::from(side * side - lo),
+        ];
+        for cost in costings {
+            let keys: Vec<u128> =
+                edges.iter().enumerate().map(|(i, &e)| pack_collapse(cost(i, e), e)).collect();
+            for wanted in [1, 7, 50, 150, edges.len()] {
+                engine.pass += 1;
+                let order = SortedCollapses { keys: keys.clone(), sorted: 0, next: 0, batch: keys.len() };
+                let mut in_order = engine.choose_in_cost_order(order, wanted);
+                engine.pass += 1;
+                let mut by_rounds = engine.choose_by_rounds(keys.clone(), wanted, &mut marks);
+                in_order.sort_unstable();
+                by_rounds.sort_unstable();
+                assert_eq!(by_rounds, in_order, "wanted {wanted}");
+            }
+        }
+    }
 
     /// Sorted a batch at a time (batches of 1024, 2048, ...), 5000 distinct keys come out
     /// in the full sort's order.

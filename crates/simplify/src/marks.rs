@@ -30,6 +30,33 @@ impl ScratchMarks {
         Epoch(self.epoch)
     }
 
+    /// `len` new, consecutive values, the first returned: a slot holds value `base + i`
+    /// when it was [`Self::set`] in this range, a value below `base` otherwise (every
+    /// earlier set's and range's marks go stale). On wrap-around the marks are cleared.
+    #[inline]
+    pub(crate) fn fresh_range(&mut self, len: usize) -> u32 {
+        let len = u32::try_from(len).expect("fewer than 2^32 values");
+        if self.epoch.checked_add(len).is_none_or(|e| e == u32::MAX) {
+            self.marks.fill(0);
+            self.epoch = 0;
+        }
+        let base = self.epoch + 1;
+        self.epoch += len;
+        base
+    }
+
+    /// The value of `slot` (see [`Self::fresh_range`]).
+    #[inline]
+    pub(crate) fn get(&self, slot: u32) -> u32 {
+        self.marks[slot as usize]
+    }
+
+    /// Gives `slot` the value `value` (see [`Self::fresh_range`]).
+    #[inline]
+    pub(crate) fn set(&mut self, slot: u32, value: u32) {
+        self.marks[slot as usize] = value;
+    }
+
     #[inline]
     pub(crate) fn insert(&mut self, slot: u32, set: Epoch) {
         self.marks[slot as usize] = set.0;
@@ -59,5 +86,24 @@ mod tests {
         let wrapped = marks.fresh();
         assert_eq!(wrapped, Epoch(1));
         assert!(!marks.contains(2, wrapped) && !marks.contains(1, wrapped));
+    }
+
+    /// A range's values are at least its base; a later set's or range's base is above
+    /// every value of the earlier ones, and a range that would wrap clears the marks.
+    #[test]
+    fn ranges_go_stale_like_sets() {
+        let mut marks = ScratchMarks::new(3);
+        let base = marks.fresh_range(10);
+        marks.set(0, base + 9);
+        assert!(marks.get(0) >= base && marks.get(1) < base);
+        let set = marks.fresh();
+        assert!(!marks.contains(0, set));
+        let next = marks.fresh_range(5);
+        assert!(marks.get(0) < next);
+        marks.epoch = u32::MAX - 3;
+        marks.set(2, u32::MAX - 3);
+        let wrapped = marks.fresh_range(5);
+        assert_eq!(wrapped, 1);
+        assert!(marks.get(2) < wrapped);
     }
 }
