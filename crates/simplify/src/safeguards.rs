@@ -152,7 +152,13 @@ impl Engine {
             let e1 = n2 - n0;
             let e2 = n2 - n1;
             let new = e0.cross(&e1);
-            let longest_sq = e0.norm_squared().max(e1.norm_squared()).max(e2.norm_squared());
+            // The larger by a plain comparison, not `f64::max` (whose NaN handling costs
+            // five instructions each). The two differ only when a squared length is NaN,
+            // and then both refuse the face as degenerate: a NaN corner makes
+            // `twice_area` NaN, and a NaN from `inf - inf` leaves another edge infinite
+            // (so `f64::max` gives infinity) or every edge NaN.
+            let larger = |x: f64, y: f64| if x > y { x } else { y };
+            let longest_sq = larger(larger(e0.norm_squared(), e1.norm_squared()), e2.norm_squared());
             let twice_area = new.norm();
             // Written so that a NaN area is refused too.
             if twice_area.partial_cmp(&(DEGENERATE_RATIO * longest_sq)) != Some(std::cmp::Ordering::Greater) {
