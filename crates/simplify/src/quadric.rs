@@ -177,7 +177,7 @@ impl Quadric {
             (c01 * b0 + c11 * b1 + c12 * b2) * inv,
             (c02 * b0 + c12 * b1 + c22 * b2) * inv,
         );
-        (p.x.is_finite() && p.y.is_finite() && p.z.is_finite()).then_some(p)
+        all_finite(&p).then_some(p)
     }
 
     /// The point of segment `[p0, p1]` minimising the quadric, or `None` when the
@@ -195,6 +195,15 @@ impl Quadric {
         let t = (-slope / curvature).clamp(0.0, 1.0);
         Some(p0 + d * t)
     }
+}
+
+/// Whether all three coordinates are finite, in one comparison (three `is_finite` tests
+/// cost three masks and branches): `x - x` is +0 for a finite `x` and NaN for an
+/// infinite or NaN one, which makes the sum NaN.
+#[inline]
+#[expect(clippy::eq_op, reason = "`x - x` is the test")]
+fn all_finite(p: &Vec3) -> bool {
+    (p.x - p.x) + (p.y - p.y) + (p.z - p.z) == 0.0
 }
 
 /// The plane of a triangle, `n·x + offset = 0` (unit `n`), and its area: 40 bytes
@@ -257,6 +266,20 @@ impl std::ops::Add for Quadric {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `all_finite` is three `is_finite` tests: any infinite or NaN coordinate fails it.
+    #[test]
+    fn all_finite_is_three_finiteness_tests() {
+        let values = [0.0, -0.0, 1.5, -3e300, f64::MIN_POSITIVE, f64::INFINITY, f64::NEG_INFINITY, f64::NAN];
+        for &x in &values {
+            for &y in &values {
+                for &z in &values {
+                    let expected = x.is_finite() && y.is_finite() && z.is_finite();
+                    assert_eq!(all_finite(&Vec3::new(x, y, z)), expected, "({x}, {y}, {z})");
+                }
+            }
+        }
+    }
 
     /// The plane z = 1 with weight 2: a point at z = 4 is 3 away, so the error is 2·9.
     #[test]
