@@ -404,15 +404,16 @@ impl Engine {
                     // Slots `v..w`, untouched in the last pass, keep their edges: the runs
                     // are copied whole, and only the costs of edges to a slot modified in
                     // it are computed again.
-                    let mut w = v + 1;
-                    while w < slots.end && !touched(w) {
-                        w += 1;
-                    }
+                    let after = &self.touched_in_pass[v as usize + 1..slots.end as usize];
+                    let w = v + 1 + after.iter().position(|&t| t >= last).unwrap_or(after.len()) as u32;
                     let (i, j) = ((v - slots.start) as usize, (w - slots.start) as usize);
                     let from = old.start[i] as usize;
                     let to = old.start.get(j).map_or(old.his.len(), |&e| e as usize);
                     let base = out.his.len();
-                    out.start.extend(old.start[i..j].iter().map(|&s| (s as usize - from + base) as u32));
+                    // In `u32`, wrapping (the shift may be either way): one vector add for
+                    // four slots.
+                    let shift = (base as u32).wrapping_sub(from as u32);
+                    out.start.extend(old.start[i..j].iter().map(|&s| s.wrapping_add(shift)));
                     out.his.extend_from_slice(&old.his[from..to]);
                     out.costs.extend_from_slice(&old.costs[from..to]);
                     let end = out.his.len();
