@@ -94,15 +94,23 @@ pub(crate) fn run_engine(
     // since keeps its edges, an edge whose endpoints did not change keeps its quadric
     // cost (Lindstrom–Turk's reads the faces around the edge: it is always recomputed).
     let mut previous = EdgeCosts::default();
+    // A pass after one that performed nothing (every exhaustive pass) would list and
+    // cost again exactly the edges and costs it has: nothing changed in between.
+    let mut changed = true;
     while !target.reached(&engine) {
         engine.pass += 1;
-        let ranked = engine.pick_and_rank_edge_collapses(std::mem::take(&mut previous));
+        let ranked = if changed {
+            engine.pick_and_rank_edge_collapses(std::mem::take(&mut previous))
+        } else {
+            std::mem::take(&mut previous)
+        };
         let order = sort_edge_collapses(&ranked, target.remaining(&engine), pass);
         let before = engine.collapses;
         engine.perform_edge_collapses(order, &target, pass, &mut marks);
         progress.advance((engine.collapses - before) as u64);
         previous = ranked;
-        pass = match (engine.collapses > before, pass) {
+        changed = engine.collapses > before;
+        pass = match (changed, pass) {
             (true, _) => Pass::Batched,
             (false, Pass::Batched) => Pass::Exhaustive,
             (false, Pass::Exhaustive) => break,
