@@ -130,8 +130,7 @@ impl Engine {
     /// not shared with `other` becomes degenerate, turns its normal past the threshold
     /// from before the collapse or from the input (`Flip`), or ends up too far from the
     /// input normals of the vertices at its corners (`Fold`, `max_corner_normal_deg`).
-    /// Inlined by force into `check_collapse` (−1.2 M instructions on SCAPE: the
-    /// engine's fields are loaded once for both calls, not once per call).
+    /// Inlined by force into `check_collapse` (−1.2 M instructions on SCAPE).
     #[inline(always)]
     pub(crate) fn check_moved_faces(&self, moved: u32, other: u32, position: &Vec3) -> Result<(), Refusal> {
         for &f in self.lists.of(moved) {
