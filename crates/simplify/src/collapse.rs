@@ -397,11 +397,15 @@ impl Engine {
                         out.start.push(out.his.len() as u32);
                         if self.flags[v as usize] & (ALIVE | FROZEN) == ALIVE {
                             let (old_his, old_costs) = old.of((v - slots.start) as usize);
+                            // Both runs ascend: the old edge of each new one is found by a
+                            // cursor that only moves forwards (a binary search each cost more).
+                            let mut j = 0;
                             for &x in self.upper_neighbours(v, &mut upper).iter() {
-                                let reused = match old_his.binary_search(&x) {
-                                    Ok(j) if reuse_costs && unchanged(v, x) => Some(old_costs[j]),
-                                    _ => None,
-                                };
+                                while j < old_his.len() && old_his[j] < x {
+                                    j += 1;
+                                }
+                                let listed = j < old_his.len() && old_his[j] == x;
+                                let reused = (listed && reuse_costs && unchanged(v, x)).then(|| old_costs[j]);
                                 out.his.push(x);
                                 out.costs.push(reused.unwrap_or_else(|| self.cost_of(v, x)));
                             }
