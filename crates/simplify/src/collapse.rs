@@ -801,13 +801,18 @@ fn sort_edge_collapses(ranked: &EdgeCosts, needed: usize, pass: Pass) -> SortedC
         let goal = ((needed as f64 * PASS_GOAL_FRACTION).ceil() as usize).clamp(1, count);
         limit = nth_smallest_cost(ranked, goal - 1) * PASS_ERROR_FACTOR;
     }
+    // Every ranked cost is finite or +inf (`cost_of`), so "finite and at most `limit`"
+    // is one comparison with `limit`, or with the largest finite value when `limit` is
+    // infinite.
+    let bound = if limit == f64::INFINITY { f64::MAX } else { limit };
     let mut order: Vec<u128> = Vec::new();
     for c in &ranked.chunks {
         // Most edges fail the limit: the slot of a kept edge is found by a cursor that
         // only moves forwards, not by a walk through every slot's run.
         let mut slot = 0;
         for (j, (&hi, &cost)) in c.his.iter().zip(&c.costs).enumerate() {
-            if cost.is_finite() && cost <= limit {
+            debug_assert!(cost.is_finite() || cost == f64::INFINITY, "ranked cost {cost}");
+            if cost <= bound {
                 while c.start.get(slot + 1).is_some_and(|&next| next as usize <= j) {
                     slot += 1;
                 }
