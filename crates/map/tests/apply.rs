@@ -8,19 +8,6 @@ use desal_mesh::{Face, MeshError, PartLabels, PoseSet, TriMesh, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-/// An `nx × ny` grid of vertices (spacing 1) triangulated into `2(nx-1)(ny-1)` faces.
-fn grid_faces(nx: u32, ny: u32) -> Vec<Face> {
-    let mut faces = Vec::new();
-    for j in 0..ny - 1 {
-        for i in 0..nx - 1 {
-            let v = j * nx + i;
-            faces.push([v, v + 1, v + nx]);
-            faces.push([v + 1, v + nx + 1, v + nx]);
-        }
-    }
-    faces
-}
-
 /// A registered pose set over a 10×10 grid: pose 0 (the template) flat, the others
 /// randomly displaced, plus four part labels by quadrant.
 fn grid_pose_set(rng: &mut ChaCha8Rng, pose_count: usize) -> (PoseSet, PartLabels) {
@@ -37,7 +24,7 @@ fn grid_pose_set(rng: &mut ChaCha8Rng, pose_count: usize) -> (PoseSet, PartLabel
         })
         .collect();
     let names = (0..pose_count).map(|p| format!("pose{p}")).collect();
-    let pose_set = PoseSet::try_new(names, poses, grid_faces(nx, ny), 0).unwrap();
+    let pose_set = PoseSet::try_new(names, poses, desal_testdata::golden::grid_faces(nx, ny), 0).unwrap();
     let labels: Vec<u32> =
         (0..nx * ny).map(|v| u32::from(v % nx >= 5) + 2 * u32::from(v / nx >= 5)).collect();
     let labels = PartLabels::try_new(labels, ["a", "b", "c", "d"].map(String::from).to_vec()).unwrap();

@@ -971,15 +971,7 @@ mod tests {
         let side = 24u32;
         let positions =
             (0..side * side).map(|i| Vec3::new(f64::from(i % side), f64::from(i / side), 0.0)).collect();
-        let mut faces = Vec::new();
-        for y in 0..side - 1 {
-            for x in 0..side - 1 {
-                let v = y * side + x;
-                faces.push([v, v + 1, v + side]);
-                faces.push([v + 1, v + side + 1, v + side]);
-            }
-        }
-        let mesh = TriMesh { positions, faces };
+        let mesh = TriMesh { positions, faces: desal_testdata::golden::grid_faces(side, side) };
         let input = SimplifyInput::new(&mesh);
         let config = SimplifyConfig::default();
         let mut engine = Engine::new(&[mesh.positions.as_slice()], 0, &input, mesh.faces.clone(), &config);

@@ -4,7 +4,21 @@
 //! test fails when a stage's output changes, and its message says which `VERSION` to
 //! bump (the driver's cache keys carry it).
 
-use desal_mesh::{PartLabels, PoseSet, TriMesh, Vec3};
+use desal_mesh::{Face, PartLabels, PoseSet, TriMesh, Vec3};
+
+/// The faces of an `nx × ny` grid of vertices (row by row, `x` fastest), two triangles
+/// per square, all wound the same way: `2 (nx − 1)(ny − 1)` faces.
+pub fn grid_faces(nx: u32, ny: u32) -> Vec<Face> {
+    let mut faces = Vec::new();
+    for j in 0..ny.saturating_sub(1) {
+        for i in 0..nx.saturating_sub(1) {
+            let v = j * nx + i;
+            faces.push([v, v + 1, v + nx]);
+            faces.push([v + 1, v + nx + 1, v + nx]);
+        }
+    }
+    faces
+}
 
 /// A closed tube along +y, `rings` rings of `segments` vertices plus two cap centres,
 /// with a slight deterministic wobble so no two edges cost exactly the same.
