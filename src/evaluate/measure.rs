@@ -241,7 +241,7 @@ impl<'a> Target<'a> {
     /// indices refitted, not built (the same answers).
     fn refit(&self, mesh: TriMesh) -> Target<'static> {
         let surface = Cow::Owned(self.surface.refit(&mesh));
-        Target { vertices: self.vertices.refit(&mesh.positions), surface, mesh }
+        self.with_surface_refitted(mesh, surface)
     }
 
     /// [`Target::with_surface`] for `mesh`, the same vertices as this target's in
