@@ -141,6 +141,15 @@ fn list_chunk(
     engine.list_chunk(slots, old, have_previous)
 }
 
+/// [`Engine::try_collapse`], compiled twice like [`list_chunk`]. Its steps (placement,
+/// safeguards, the collapse) are inlined by force into both clones so that the AVX2 one
+/// runs them with its features: −2.3 M instructions on SCAPE; `FaceLists::collapse`
+/// stays a call (inlined too, +1.7 M).
+#[multiversion(targets("x86_64+avx2+fma+bmi1+bmi2+lzcnt+popcnt+movbe+f16c"))]
+fn try_collapse(engine: &mut Engine, a: u32, b: u32, marks: &mut ScratchMarks) -> bool {
+    engine.try_collapse(a, b, marks)
+}
+
 /// How a pass performs its ranked collapses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Pass {
@@ -558,7 +567,7 @@ impl Engine {
                     if target.reached(self) {
                         break;
                     }
-                    self.try_collapse(a, b, marks);
+                    try_collapse(self, a, b, marks);
                 }
             }
             Pass::Exhaustive => {
@@ -569,7 +578,7 @@ impl Engine {
                     if self.changed_this_pass(a) || self.changed_this_pass(b) {
                         continue;
                     }
-                    if self.try_collapse(a, b, marks) {
+                    if try_collapse(self, a, b, marks) {
                         self.changed_in_pass[a as usize] = self.pass;
                         self.changed_in_pass[b as usize] = self.pass;
                     }
@@ -683,6 +692,8 @@ impl Engine {
 
     /// Evaluates edge `(a, b)` on the current mesh, checks the safeguards and performs
     /// the collapse; a refusal is counted. True when the collapse was performed.
+    /// Inlined by force into the clones of the free [`try_collapse`].
+    #[inline(always)]
     fn try_collapse(&mut self, a: u32, b: u32, marks: &mut ScratchMarks) -> bool {
         let Some(candidate) = self.evaluate(a, b) else { return false };
         if let Err(refusal) = self.check_collapse(&candidate, marks) {
@@ -695,6 +706,9 @@ impl Engine {
 
     /// Performs a checked collapse: the faces on the edge die, `remove`'s other faces
     /// are re-pointed to `keep`, the quadrics add up and `keep` moves.
+    /// Inlined by force, like every step of `try_collapse`, so that its AVX2 clone's
+    /// features reach it (the free [`try_collapse`]).
+    #[inline(always)]
     fn collapse_edge(&mut self, c: &Candidate) {
         let (r, k) = (c.remove, c.keep);
         // Every vertex around `remove` gains `keep` or loses `remove` as a neighbour, and

@@ -128,6 +128,9 @@ impl Engine {
     /// Optimal placement (single pose): the quadric's minimiser if well-conditioned and
     /// near the edge, else the best point of the segment, else the better endpoint. The
     /// slot kept is `seam_keeps` when the seam rule names one, else the nearer endpoint.
+    /// Inlined by force, like every step of `try_collapse`, so that its AVX2 clone's
+    /// features reach it (`collapse.rs`).
+    #[inline(always)]
     fn place_optimally(&self, a: u32, b: u32, seam_keeps: Option<u32>) -> Candidate {
         let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
         let (position, error) = self.optimal_position(a, b);

@@ -19,6 +19,9 @@ const DEGENERATE_RATIO: f64 = 1e-6;
 impl Engine {
     /// All safeguards for one candidate: the link condition, then the geometry of every
     /// face that survives the collapse. `marks` is scratch.
+    /// Inlined by force, like every step of `try_collapse`, so that its AVX2 clone's
+    /// features reach it (`collapse.rs`).
+    #[inline(always)]
     pub(crate) fn check_collapse(&self, c: &Candidate, marks: &mut ScratchMarks) -> Result<(), Refusal> {
         self.check_seam_rule(c.remove, c.keep)?;
         if !self.link_condition_holds(c.remove, c.keep, marks) {
@@ -78,6 +81,9 @@ impl Engine {
     /// faces on the edge; an interior edge does not join two boundary vertices (that
     /// would pinch); and no apex is left with a degenerate fan (a closed fan of three
     /// faces — the tetrahedron case — or a single boundary face).
+    /// Inlined by force, like every step of `try_collapse`, so that its AVX2 clone's
+    /// features reach it (`collapse.rs`).
+    #[inline(always)]
     pub(crate) fn link_condition_holds(&self, a: u32, b: u32, marks: &mut ScratchMarks) -> bool {
         // `a`'s neighbours are marked, and the faces on the edge found, in one walk of
         // `a`'s faces.
@@ -112,6 +118,9 @@ impl Engine {
 
     /// The number of vertices adjacent to both `a` and `b`, `of_a` the set of `a`'s
     /// neighbours (and `a`).
+    /// Inlined by force, like every step of `try_collapse`, so that its AVX2 clone's
+    /// features reach it (`collapse.rs`).
+    #[inline(always)]
     fn count_common_neighbours(&self, a: u32, b: u32, of_a: Epoch, marks: &mut ScratchMarks) -> usize {
         let counted = marks.fresh();
         let mut common = 0;
