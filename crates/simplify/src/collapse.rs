@@ -33,7 +33,6 @@
 use std::time::Instant;
 
 use desal_mesh::{Progress, TriMesh, Vec3};
-use multiversion::multiversion;
 use rayon::prelude::*;
 
 use crate::classify::{
@@ -122,32 +121,42 @@ pub(crate) fn run_engine(
     Ok(engine.extract_output(mesh, stop, started))
 }
 
-/// [`Engine::list_chunk`], compiled twice: for baseline x86-64 and for x86-64-v3's
+/// Compiles the hot functions it wraps twice: for baseline x86-64 and for x86-64-v3's
 /// features (AVX2, FMA, BMI; the `-C target-cpu=x86-64-v3` set less what stable Rust
 /// cannot name), the clone chosen at run time on the first call (`multiversion`; the
-/// generated `unsafe` dispatch is the crate's own, outside this crate's `unsafe_code`
-/// lint). The method is inlined by force into both clones, which is how the features
-/// reach it. Results are the baseline's bit for bit: Rust never contracts `a * b + c`
-/// into an FMA, and wider vectors change no arithmetic, only how many lanes one
-/// instruction does (−6.3 M instructions on SCAPE, counted by cachegrind on the AVX2
-/// clone).
-#[multiversion(targets("x86_64+avx2+fma+bmi1+bmi2+lzcnt+popcnt+movbe+f16c"))]
-fn list_chunk(
-    engine: &Engine,
-    slots: std::ops::Range<u32>,
-    old: ChunkEdges,
-    have_previous: bool,
-) -> ChunkEdges {
-    engine.list_chunk(slots, old, have_previous)
+/// generated `unsafe` dispatch is that crate's macro's, which the workspace's
+/// `unsafe_code` lint does not see into). What a wrapped function inlines is compiled
+/// with the features; what it calls is not. Results are the baseline's bit for bit:
+/// Rust never contracts `a * b + c` into an FMA, and wider vectors change no arithmetic,
+/// only how many lanes one instruction does. The one list of targets for the crate.
+macro_rules! with_avx2_clone {
+    ($($item:item)*) => {
+        $(
+            #[multiversion::multiversion(targets("x86_64+avx2+fma+bmi1+bmi2+lzcnt+popcnt+movbe+f16c"))]
+            $item
+        )*
+    };
 }
 
-/// [`Engine::try_collapse`], compiled twice like [`list_chunk`]. Its steps (placement,
-/// safeguards, the collapse) are inlined by force into both clones so that the AVX2 one
-/// runs them with its features: −2.3 M instructions on SCAPE; `FaceLists::collapse`
-/// stays a call (inlined too, +1.7 M).
-#[multiversion(targets("x86_64+avx2+fma+bmi1+bmi2+lzcnt+popcnt+movbe+f16c"))]
-fn try_collapse(engine: &mut Engine, a: u32, b: u32, marks: &mut ScratchMarks) -> bool {
-    engine.try_collapse(a, b, marks)
+with_avx2_clone! {
+    /// [`Engine::list_chunk`], inlined by force into both clones (−6.3 M instructions on
+    /// SCAPE, counted by cachegrind on the AVX2 clone).
+    fn list_chunk(
+        engine: &Engine,
+        slots: std::ops::Range<u32>,
+        old: ChunkEdges,
+        have_previous: bool,
+    ) -> ChunkEdges {
+        engine.list_chunk(slots, old, have_previous)
+    }
+
+    /// [`Engine::try_collapse`]. Its steps (placement, safeguards, the collapse) are
+    /// inlined by force into both clones so that the AVX2 one runs them with its
+    /// features: −2.3 M instructions on SCAPE; `FaceLists::collapse` stays a call
+    /// (inlined too, +1.7 M).
+    fn try_collapse(engine: &mut Engine, a: u32, b: u32, marks: &mut ScratchMarks) -> bool {
+        engine.try_collapse(a, b, marks)
+    }
 }
 
 /// How a pass performs its ranked collapses.
@@ -833,43 +842,45 @@ impl Engine {
     }
 }
 
-/// Pass, step 3: the edges this pass may perform, cheapest first (ties by `(lo, hi)`),
-/// each packed by [`pack_collapse`]. A batched pass keeps only costs up to
-/// `PASS_ERROR_FACTOR` times the cost of the `needed`-th cheapest (capped by
-/// `PASS_GOAL_FRACTION`) and takes them all; an exhaustive one keeps every finite cost
-/// and stops at the target, usually early (SCAPE → 5000: after 1006 of 8878), so its
-/// order is sorted as it is taken.
-fn sort_edge_collapses(ranked: &EdgeCosts, needed: usize, pass: Pass) -> SortedCollapses {
-    let count = ranked.chunks.iter().map(|c| c.costs.len()).sum::<usize>();
-    let mut limit = f64::INFINITY;
-    if pass == Pass::Batched && count > 0 {
-        let goal = ((needed as f64 * PASS_GOAL_FRACTION).ceil() as usize).clamp(1, count);
-        limit = nth_smallest_cost(ranked, goal - 1) * PASS_ERROR_FACTOR;
-    }
-    // Every ranked cost is finite or +inf (`cost_of`), so "finite and at most `limit`"
-    // is one comparison with `limit`, or with the largest finite value when `limit` is
-    // infinite.
-    let bound = if limit == f64::INFINITY { f64::MAX } else { limit };
-    let mut order: Vec<u128> = Vec::new();
-    for c in &ranked.chunks {
-        // Most edges fail the limit: the slot of a kept edge is found by a cursor that
-        // only moves forwards, not by a walk through every slot's run.
-        let mut slot = 0;
-        for (j, (&hi, &cost)) in c.his.iter().zip(&c.costs).enumerate() {
-            debug_assert!(cost.is_finite() || cost == f64::INFINITY, "ranked cost {cost}");
-            if cost <= bound {
-                while c.start.get(slot + 1).is_some_and(|&next| next as usize <= j) {
-                    slot += 1;
+with_avx2_clone! {
+    /// Pass, step 3: the edges this pass may perform, cheapest first (ties by `(lo, hi)`),
+    /// each packed by [`pack_collapse`]. A batched pass keeps only costs up to
+    /// `PASS_ERROR_FACTOR` times the cost of the `needed`-th cheapest (capped by
+    /// `PASS_GOAL_FRACTION`) and takes them all; an exhaustive one keeps every finite cost
+    /// and stops at the target, usually early (SCAPE → 5000: after 1006 of 8878), so its
+    /// order is sorted as it is taken. Compiled twice (−0.2 M instructions on SCAPE).
+    fn sort_edge_collapses(ranked: &EdgeCosts, needed: usize, pass: Pass) -> SortedCollapses {
+        let count = ranked.chunks.iter().map(|c| c.costs.len()).sum::<usize>();
+        let mut limit = f64::INFINITY;
+        if pass == Pass::Batched && count > 0 {
+            let goal = ((needed as f64 * PASS_GOAL_FRACTION).ceil() as usize).clamp(1, count);
+            limit = nth_smallest_cost(ranked, goal - 1) * PASS_ERROR_FACTOR;
+        }
+        // Every ranked cost is finite or +inf (`cost_of`), so "finite and at most `limit`"
+        // is one comparison with `limit`, or with the largest finite value when `limit` is
+        // infinite.
+        let bound = if limit == f64::INFINITY { f64::MAX } else { limit };
+        let mut order: Vec<u128> = Vec::new();
+        for c in &ranked.chunks {
+            // Most edges fail the limit: the slot of a kept edge is found by a cursor that
+            // only moves forwards, not by a walk through every slot's run.
+            let mut slot = 0;
+            for (j, (&hi, &cost)) in c.his.iter().zip(&c.costs).enumerate() {
+                debug_assert!(cost.is_finite() || cost == f64::INFINITY, "ranked cost {cost}");
+                if cost <= bound {
+                    while c.start.get(slot + 1).is_some_and(|&next| next as usize <= j) {
+                        slot += 1;
+                    }
+                    order.push(pack_collapse(cost, [c.first + slot as u32, hi]));
                 }
-                order.push(pack_collapse(cost, [c.first + slot as u32, hi]));
             }
         }
+        let first_batch = match pass {
+            Pass::Batched => order.len(),
+            Pass::Exhaustive => EXHAUSTIVE_FIRST_BATCH,
+        };
+        SortedCollapses { keys: order, sorted: 0, next: 0, batch: first_batch }
     }
-    let first_batch = match pass {
-        Pass::Batched => order.len(),
-        Pass::Exhaustive => EXHAUSTIVE_FIRST_BATCH,
-    };
-    SortedCollapses { keys: order, sorted: 0, next: 0, batch: first_batch }
 }
 
 /// Below this many undecided edges, [`Engine::choose_by_rounds`] sorts them and walks them.
