@@ -42,39 +42,73 @@ pub(crate) const CHUNK: usize = 2048;
 
 /// The plane of every face of one pose (whose quadric is the face's), in face order.
 pub(crate) fn fill_face_planes(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<FacePlane> {
-    faces
-        .par_iter()
-        .map(|f| {
+    let mut planes = vec![FacePlane::default(); faces.len()];
+    planes
+        .par_chunks_mut(CHUNK)
+        .zip(faces.par_chunks(CHUNK))
+        .for_each(|(planes, faces)| face_planes_chunk(planes, faces, positions));
+    planes
+}
+
+with_avx2_clone! {
+    /// [`fill_face_planes`] for one chunk of faces, compiled twice (`with_avx2_clone!`):
+    /// a loop per chunk where a closure per face was (−0.7 M instructions on SCAPE).
+    fn face_planes_chunk(planes: &mut [FacePlane], faces: &[[u32; 3]], positions: &[Vec3]) {
+        for (plane, f) in planes.iter_mut().zip(faces) {
             let [a, b, c] = corners(f, positions);
-            FacePlane::of_triangle(&a, &b, &c)
-        })
-        .collect()
+            *plane = FacePlane::of_triangle(&a, &b, &c);
+        }
+    }
 }
 
 /// The unnormalised normal of every face (template pose, input coordinates): what the
 /// fold-over safeguard compares surviving faces with. Its length is recomputed where
 /// it is needed (the same value, bit for bit): storing it took 8 of 32 bytes per face.
 pub(crate) fn compute_input_normals(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<Vec3> {
-    faces
-        .par_iter()
-        .map(|f| {
+    let mut normals = vec![Vec3::zeros(); faces.len()];
+    normals
+        .par_chunks_mut(CHUNK)
+        .zip(faces.par_chunks(CHUNK))
+        .for_each(|(normals, faces)| input_normals_chunk(normals, faces, positions));
+    normals
+}
+
+with_avx2_clone! {
+    /// [`compute_input_normals`] for one chunk of faces, compiled twice
+    /// (`with_avx2_clone!`): a loop per chunk where a closure per face was (−0.45 M).
+    fn input_normals_chunk(normals: &mut [Vec3], faces: &[[u32; 3]], positions: &[Vec3]) {
+        for (normal, f) in normals.iter_mut().zip(faces) {
             let [a, b, c] = corners(f, positions);
-            (b - a).cross(&(c - a))
-        })
-        .collect()
+            *normal = (b - a).cross(&(c - a));
+        }
+    }
 }
 
 /// The unit area-weighted normal of every vertex (zero for an isolated vertex): the
 /// surface's orientation where the vertex came from.
 pub(crate) fn compute_vertex_normals(lists: &FaceLists, input_normals: &[Vec3]) -> Vec<Vec3> {
-    (0..lists.slot_count() as u32)
-        .into_par_iter()
-        .map(|v| {
+    let mut normals = vec![Vec3::zeros(); lists.slot_count()];
+    normals.par_chunks_mut(CHUNK).enumerate().for_each(|(chunk, normals)| {
+        vertex_normals_chunk(normals, (chunk * CHUNK) as u32, lists, input_normals)
+    });
+    normals
+}
+
+with_avx2_clone! {
+    /// [`compute_vertex_normals`] for the slots from `first` on, compiled twice
+    /// (`with_avx2_clone!`): a loop per chunk where a closure per slot was (−0.3 M).
+    fn vertex_normals_chunk(
+        normals: &mut [Vec3],
+        first: u32,
+        lists: &FaceLists,
+        input_normals: &[Vec3],
+    ) {
+        for (v, normal) in (first..).zip(normals.iter_mut()) {
             let sum: Vec3 = lists.of(v).iter().map(|&f| input_normals[f as usize]).sum();
             let length = sum.norm();
-            if length > 0.0 { sum / length } else { Vec3::zeros() }
-        })
-        .collect()
+            *normal = if length > 0.0 { sum / length } else { Vec3::zeros() };
+        }
+    }
 }
 
 /// What the per-vertex classification reads.

@@ -13,6 +13,23 @@
 //! non-manifold input vertices) are always on; a target they prevent is reported in
 //! [`SimplifyReport::stop`], not raised as an error.
 
+/// Compiles the hot functions it wraps twice: for baseline x86-64 and for x86-64-v3's
+/// features (AVX2, FMA, BMI; the `-C target-cpu=x86-64-v3` set less what stable Rust
+/// cannot name), the clone chosen at run time on the first call (`multiversion`; the
+/// generated `unsafe` dispatch is that crate's macro's, which the workspace's
+/// `unsafe_code` lint does not see into). What a wrapped function inlines is compiled
+/// with the features; what it calls is not. Results are the baseline's bit for bit:
+/// Rust never contracts `a * b + c` into an FMA, and wider vectors change no arithmetic,
+/// only how many lanes one instruction does. The one list of targets for the crate.
+macro_rules! with_avx2_clone {
+    ($($item:item)*) => {
+        $(
+            #[multiversion::multiversion(targets("x86_64+avx2+fma+bmi1+bmi2+lzcnt+popcnt+movbe+f16c"))]
+            $item
+        )*
+    };
+}
+
 mod api;
 mod classify;
 mod collapse;
