@@ -40,14 +40,25 @@ pub(crate) const SEAM_WEIGHT: f64 = 1.0;
 /// Vertices (or faces, or edges) per work item of the parallel passes.
 pub(crate) const CHUNK: usize = 2048;
 
-/// The plane of every face of one pose (whose quadric is the face's), in face order.
-pub(crate) fn fill_face_planes(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<FacePlane> {
-    let mut planes = vec![FacePlane::default(); faces.len()];
-    planes
+/// One value per face, filled in parallel a chunk of `CHUNK` faces at a time by
+/// `chunk(values, faces)` (a loop per chunk, in one of the clones of
+/// `with_avx2_clone!`, where a closure per face was).
+fn per_face<T: Clone + Send>(
+    faces: &[[u32; 3]],
+    empty: T,
+    chunk: impl Fn(&mut [T], &[[u32; 3]]) + Sync,
+) -> Vec<T> {
+    let mut values = vec![empty; faces.len()];
+    values
         .par_chunks_mut(CHUNK)
         .zip(faces.par_chunks(CHUNK))
-        .for_each(|(planes, faces)| face_planes_chunk(planes, faces, positions));
-    planes
+        .for_each(|(values, faces)| chunk(values, faces));
+    values
+}
+
+/// The plane of every face of one pose (whose quadric is the face's), in face order.
+pub(crate) fn fill_face_planes(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<FacePlane> {
+    per_face(faces, FacePlane::default(), |planes, faces| face_planes_chunk(planes, faces, positions))
 }
 
 with_avx2_clone! {
@@ -65,12 +76,7 @@ with_avx2_clone! {
 /// fold-over safeguard compares surviving faces with. Its length is recomputed where
 /// it is needed (the same value, bit for bit): storing it took 8 of 32 bytes per face.
 pub(crate) fn compute_input_normals(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<Vec3> {
-    let mut normals = vec![Vec3::zeros(); faces.len()];
-    normals
-        .par_chunks_mut(CHUNK)
-        .zip(faces.par_chunks(CHUNK))
-        .for_each(|(normals, faces)| input_normals_chunk(normals, faces, positions));
-    normals
+    per_face(faces, Vec3::zeros(), |normals, faces| input_normals_chunk(normals, faces, positions))
 }
 
 with_avx2_clone! {
