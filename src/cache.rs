@@ -373,7 +373,13 @@ impl Cache {
     /// Removes every entry whose key is not in `keep` (hex keys), each by
     /// rename-then-delete, plus dead runs' leftovers; returns `(entries kept, entries
     /// removed, bytes freed)`. `desal cache gc` passes the keys of a pipeline's stages.
-    pub fn gc(&self, keep: &std::collections::BTreeSet<String>) -> Result<(usize, usize, u64)> {
+    /// An entry of a stage no pipeline key names (`desal eval`'s floor) is kept when
+    /// every input its `key.json` records is in `inputs` (content hashes).
+    pub fn gc(
+        &self,
+        keep: &std::collections::BTreeSet<String>,
+        inputs: &std::collections::BTreeSet<ContentHash>,
+    ) -> Result<(usize, usize, u64)> {
         let (mut kept, mut removed, mut freed) = (0, 0, 0);
         let Ok(stages) = fs::read_dir(&self.root) else { return Ok((0, 0, 0)) };
         for stage in stages.flatten() {
@@ -390,7 +396,7 @@ impl Cache {
                 if name.starts_with('.') || !entry.path().is_dir() {
                     continue;
                 }
-                if keep.contains(&name) {
+                if keep.contains(&name) || uses_only(&entry.path(), inputs) {
                     kept += 1;
                     continue;
                 }
@@ -412,6 +418,19 @@ impl Cache {
             }
         }
         Ok((kept, removed, freed))
+    }
+}
+
+/// Whether the entry at `dir` is an eval-derived one (`floor`) whose recorded inputs are
+/// all in `inputs`. A stage's own entries are kept by key only.
+fn uses_only(dir: &Path, inputs: &std::collections::BTreeSet<ContentHash>) -> bool {
+    match desal_io::atomic::read_json::<StageKey>(&dir.join("key.json")) {
+        Ok(key) => {
+            key.stage == crate::evaluate::floor::STAGE
+                && !key.inputs.is_empty()
+                && key.inputs.iter().all(|(_, hash)| inputs.contains(hash))
+        }
+        Err(_) => false,
     }
 }
 

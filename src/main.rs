@@ -136,10 +136,13 @@ fn run(cli: Cli) -> Result<()> {
                 progress: ProgressMode::Quiet,
                 ..RunOptions::default()
             };
-            let reports = desal::run::run(&loaded, &options)?;
-            let keep = reports.iter().flat_map(|r| r.stages.iter().map(|s| s.cache_key.clone())).collect();
+            let runs = desal::run::run_with_stages(&loaded, &options)?;
+            let keep =
+                runs.iter().flat_map(|r| r.report.stages.iter().map(|s| s.cache_key.clone())).collect();
+            // `desal eval`'s floors of these pose sets and labels are kept too.
+            let inputs = runs.iter().flat_map(|r| [r.stages.poses.hash, r.stages.labels.hash]).collect();
             let cache = desal::cache::Cache::new(cache_dir.unwrap_or_else(|| loaded.out_root.join(".cache")));
-            let (kept, removed, freed) = cache.gc(&keep)?;
+            let (kept, removed, freed) = cache.gc(&keep, &inputs)?;
             println!(
                 "{}: kept {kept} entries, removed {removed} ({:.1} MB)",
                 cache.root().display(),

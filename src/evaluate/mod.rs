@@ -19,6 +19,7 @@
 //! the `eval/` folder over (`outputs::KEPT_SUBFOLDER`).
 
 pub mod figures;
+pub mod floor;
 pub mod gltfpack;
 pub mod measure;
 pub mod meshlab;
@@ -246,16 +247,23 @@ fn evaluate_dataset(
         _ => None,
     };
     let floor = if let Some(model) = floor {
-        let floor_started = Instant::now();
-        let floor = model_floor(&inputs, model, args.folds, &full_surfaces)
-            .context("the model's floor at full resolution")?;
-        let seconds = floor_started.elapsed().as_secs_f64();
+        // Cached: it depends on the pose set, labels, model and folds only.
+        let cache = crate::cache::Cache::new(
+            args.cache_dir.clone().unwrap_or_else(|| pipeline.out_root.join(".cache")),
+        );
+        let key = floor::key(&model_name, model, args.folds, stages);
+        let measured = floor::cached(&cache, &key, || {
+            model_floor(&inputs, model, args.folds, &full_surfaces)
+                .context("the model's floor at full resolution")
+        })?;
+        let (f, seconds) = (&measured.floor, measured.seconds);
         log(&format!(
-            "the model at full resolution: held-out v2v {:.3e}, {:.2}x in-sample ({seconds:.2} s)",
-            floor.held_out.v2v,
-            floor.v2v_ratio()
+            "the model at full resolution: held-out v2v {:.3e}, {:.2}x in-sample ({seconds:.2} s{})",
+            f.held_out.v2v,
+            f.v2v_ratio(),
+            if measured.cached { ", from the cache" } else { "" }
         ));
-        Some(report::FloorReport::new(&floor, seconds))
+        Some(report::FloorReport::new(&measured))
     } else {
         None
     };

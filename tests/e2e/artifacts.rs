@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use desal_io::artifact::{
-    self, FitV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1,
+    self, FitV1, FloorV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1,
 };
 
 use crate::support::desal;
@@ -35,6 +35,22 @@ fn frozen_v1_fixtures_still_load() {
         artifact::read_artifact::<HierarchyLevelV1>(&fixture("hierarchy-level-v1.dsa")).unwrap();
     assert_eq!(producer.stage, "hierarchy-1");
     assert_eq!(level, fixture_hierarchy_level());
+    let (producer, floor, _) = artifact::read_artifact::<FloorV1>(&fixture("floor-v1.dsa")).unwrap();
+    assert_eq!(producer.stage, "floor");
+    assert_eq!(floor, fixture_floor());
+}
+
+/// A floor of the fixture pose set's one non-template pose.
+fn fixture_floor() -> FloorV1 {
+    FloorV1 {
+        model: "scape".into(),
+        poses: 1,
+        folds: 2,
+        in_sample_v2v: 0.0625,
+        in_sample_v2f: 0.03125,
+        held_out_v2v: 0.25,
+        held_out_v2f: 0.125,
+    }
 }
 
 /// A level of the fixture pose set: vertices 0, 1, 2 kept (one triangle); vertex 3 is
@@ -153,6 +169,8 @@ fn write_fixtures() {
     let producer = artifact::Producer { stage: "hierarchy-1".into(), ..producer };
     let level = fixture_hierarchy_level();
     artifact::write_artifact(&fixture("hierarchy-level-v1.dsa"), &producer, &level).unwrap();
+    let producer = artifact::Producer { stage: "floor".into(), ..producer };
+    artifact::write_artifact(&fixture("floor-v1.dsa"), &producer, &fixture_floor()).unwrap();
 }
 
 #[test]
@@ -164,7 +182,7 @@ fn inspect_describes_an_artifact_and_refuses_a_foreign_file() {
         text.contains("pose-set (format version 1)") && text.contains("poses 2, vertices 4, faces 4"),
         "{text}"
     );
-    for kind in ["labels", "fit", "saliency", "simplified", "map", "hierarchy-level"] {
+    for kind in ["labels", "fit", "saliency", "simplified", "map", "hierarchy-level", "floor"] {
         let out = desal(&["inspect", fixture(&format!("{kind}-v1.dsa")).to_str().unwrap()]);
         let text = String::from_utf8_lossy(&out.stdout);
         assert!(

@@ -339,6 +339,66 @@ fn the_deformation_model_is_chosen_by_name_and_recorded() {
     assert!(lbs > 0.0 && (lbs / anchored - 1.0).abs() > 1e-3, "lbs {lbs:e} vs scape {anchored:e} m²");
 }
 
+/// The model's floor is a cache entry: a second run reads it (same figures, "read from
+/// the cache"), another fold count or model is measured anew, a forged entry is refused
+/// and measured again, and `desal cache gc` keeps floors of the pipeline's pose set.
+#[test]
+fn the_models_floor_is_cached_and_a_forged_entry_is_measured_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = sample_pipeline(dir.path(), &data_samples().join("poses"), SAMPLE_TARGET);
+    let md = || std::fs::read_to_string(dir.path().join("out/sample/eval/eval.md")).unwrap();
+    let floor_dir = dir.path().join("out/.cache/floor");
+    let entries = || {
+        let mut e: Vec<PathBuf> = std::fs::read_dir(&floor_dir)
+            .map(|d| {
+                d.flatten()
+                    .map(|e| e.path())
+                    .filter(|p| !p.file_name().unwrap().to_string_lossy().starts_with('.'))
+                    .collect()
+            })
+            .unwrap_or_default();
+        e.sort();
+        e
+    };
+    let measured = eval_ok(&pipeline, "qslim-optimal", &[])["floor"].clone();
+    assert_eq!(measured["cached"], false, "{measured}");
+    assert_eq!(entries().len(), 1);
+    let cached = eval_ok(&pipeline, "qslim-optimal", &[])["floor"].clone();
+    assert_eq!(cached["cached"], true, "{cached}");
+    assert!(md().contains("(read from the cache)"));
+    for what in ["in_sample_v2v", "in_sample_v2f", "held_out_v2v", "held_out_v2f", "poses", "folds"] {
+        assert_eq!(measured[what], cached[what], "{what}");
+    }
+    // Another model is another entry.
+    let lbs = eval_ok(&pipeline, "qslim-optimal", &["--model", "lbs"])["floor"].clone();
+    assert_eq!(lbs["cached"], false);
+    assert_ne!(lbs["held_out_v2v"], measured["held_out_v2v"]);
+    assert_eq!(entries().len(), 2);
+
+    // A forged figure with its checksum broken: refused, measured again, the same figures.
+    let entry = entries()
+        .into_iter()
+        .find(|e| std::fs::read_to_string(e.join("summary.json")).unwrap().contains("\"scape\""));
+    let artifact = entry.unwrap().join("artifact.dsa");
+    let mut bytes = std::fs::read(&artifact).unwrap();
+    let last = bytes.len() - 1;
+    bytes[last] ^= 0x40;
+    std::fs::write(&artifact, &bytes).unwrap();
+    let out =
+        desal_eval(&[pipeline.to_str().unwrap(), "--methods", "qslim-optimal", "--folds", "2", "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("cache entry rejected"), "{}", stderr(&out));
+    let json = std::fs::read(dir.path().join("out/sample/eval/eval.json")).unwrap();
+    let again = serde_json::from_slice::<Value>(&json).unwrap()["floor"].clone();
+    assert_eq!(again["cached"], false);
+    assert_eq!(again["held_out_v2v"], measured["held_out_v2v"]);
+
+    // gc keeps both floors (the pipeline still has their pose set and labels).
+    let out = crate::support::desal(&["cache", "gc", pipeline.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(entries().len(), 2, "{}", String::from_utf8_lossy(&out.stdout));
+}
+
 /// Issue 17: `--sweep` runs the `--sweep-methods` at every count, and at the main
 /// target its figures and its comparison with the baseline are the main table's (the
 /// same simplification, model and poses); eval.md gets the sweep's table.

@@ -37,6 +37,10 @@ pub mod ridge;
 pub mod skeleton;
 pub mod transform;
 
+/// A BLAKE3 hash of this crate's source (`build.rs`): `desal eval` caches the model's
+/// floor under it, so a change to any model or metric measures the floor again.
+pub const SOURCE: &str = env!("DESAL_EVAL_SOURCE");
+
 pub use error::EvalError;
 pub use floor::{MeanErrors, ModelFloor, model_floor, model_floor_indexed};
 pub use folds::{folds, training_poses};

@@ -82,10 +82,12 @@ pub fn seeds(target: Target, root: &Path) -> Result<Vec<Seed>, String> {
                 bytes: br#"{"parts": ["head", "hand", "foot"], "labels": [0, 1, 2, 2, 1, 0, 0]}"#.to_vec(),
             },
         ],
-        Target::Artifact => ["fit", "hierarchy-level", "labels", "map", "pose-set", "saliency", "simplified"]
-            .iter()
-            .map(|kind| read(&format!("tests/fixtures/{kind}-v1.dsa")))
-            .collect::<Result<_, _>>()?,
+        Target::Artifact => {
+            ["fit", "floor", "hierarchy-level", "labels", "map", "pose-set", "saliency", "simplified"]
+                .iter()
+                .map(|kind| read(&format!("tests/fixtures/{kind}-v1.dsa")))
+                .collect::<Result<_, _>>()?
+        }
         Target::CanaryPanic | Target::CanaryAbort | Target::CanaryHang | Target::CanaryOom => {
             vec![Seed { name: "canary".into(), bytes: b"canary".to_vec() }]
         }

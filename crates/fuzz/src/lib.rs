@@ -22,8 +22,8 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
 use desal_io::artifact::{
-    self, ArtifactBody, ArtifactKind, FitV1, HEADER_LEN, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV1,
-    SaliencyV1, SimplifiedV1,
+    self, ArtifactBody, ArtifactKind, FitV1, FloorV1, HEADER_LEN, HierarchyLevelV1, LabelsV1, MapV1,
+    PoseSetV1, SaliencyV1, SimplifiedV1,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -240,6 +240,10 @@ fn execute_artifact(path: &Path, bytes: &[u8]) -> bool {
             for k in 0..b.up_row.len() {
                 let _ = (b.up_col[k], b.up_data[k], b.coarse_to_fine[b.up_col[k] as usize]);
             }
+        }),
+        ArtifactKind::Floor => decoded::<FloorV1>(path, bytes, |b| {
+            // What `desal inspect` prints: the ratios of validated, finite errors.
+            let _ = (b.held_out_v2v / b.in_sample_v2v, b.held_out_v2f / b.in_sample_v2f);
         }),
     }
 }

@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use desal_io::artifact::{
-    ArtifactBody, ArtifactKind, FitV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1,
+    ArtifactBody, ArtifactKind, FitV1, FloorV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1,
     SimplifiedV1, read_artifact, read_producer,
 };
 use desal_io::npz::{HierarchyArrays, NamedArray, NpyArray, NpyData};
@@ -30,6 +30,7 @@ pub fn load<'py>(py: Python<'py>, path: &Path) -> PyResult<Bound<'py, PyDict>> {
         ArtifactKind::Simplified => body::<SimplifiedV1>(path),
         ArtifactKind::Map => body::<MapV1>(path),
         ArtifactKind::HierarchyLevel => body::<HierarchyLevelV1>(path),
+        ArtifactKind::Floor => body::<FloorV1>(path),
     })?;
     let out = value(py, &body)?.cast_into::<PyDict>()?;
     out.set_item("kind", header.kind.name())?;

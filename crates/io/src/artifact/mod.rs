@@ -52,10 +52,12 @@ pub enum ArtifactKind {
     Map = 6,
     /// One level of a hierarchy: selection, upsampler, coarse faces (stage `hierarchy`).
     HierarchyLevel = 7,
+    /// A deformation model's own error at full resolution (`desal eval`).
+    Floor = 8,
 }
 
 impl ArtifactKind {
-    pub const ALL: [ArtifactKind; 7] = [
+    pub const ALL: [ArtifactKind; 8] = [
         ArtifactKind::PoseSet,
         ArtifactKind::Labels,
         ArtifactKind::Fit,
@@ -63,6 +65,7 @@ impl ArtifactKind {
         ArtifactKind::Simplified,
         ArtifactKind::Map,
         ArtifactKind::HierarchyLevel,
+        ArtifactKind::Floor,
     ];
 
     pub fn name(self) -> &'static str {
@@ -74,6 +77,7 @@ impl ArtifactKind {
             ArtifactKind::Simplified => "simplified",
             ArtifactKind::Map => "map",
             ArtifactKind::HierarchyLevel => "hierarchy-level",
+            ArtifactKind::Floor => "floor",
         }
     }
 

@@ -321,3 +321,44 @@ impl ArtifactBody for HierarchyLevelV1 {
         }
     }
 }
+
+/// A deformation model's own floor at full resolution (`desal eval`'s cached
+/// measurement, `desal_eval::model_floor`): mean v2v and v2f of the model fitted on the
+/// full-resolution pose set, in-sample and held out, in squared mesh units.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FloorV1 {
+    /// `scape`, `lbs`, … (the `--model` name it was measured under).
+    pub model: String,
+    /// The non-template poses each mean is over.
+    pub poses: u32,
+    /// The held-out folds used.
+    pub folds: u32,
+    pub in_sample_v2v: f64,
+    pub in_sample_v2f: f64,
+    pub held_out_v2v: f64,
+    pub held_out_v2f: f64,
+}
+
+impl ArtifactBody for FloorV1 {
+    const KIND: ArtifactKind = ArtifactKind::Floor;
+
+    /// At least one pose and one fold; every error finite and not negative.
+    fn validate(&self) -> Result<(), String> {
+        if self.poses == 0 || self.folds == 0 {
+            return Err(format!(
+                "the floor is over {} poses in {} folds (neither may be 0)",
+                self.poses, self.folds
+            ));
+        }
+        let errors = [
+            ("in_sample_v2v", self.in_sample_v2v),
+            ("in_sample_v2f", self.in_sample_v2f),
+            ("held_out_v2v", self.held_out_v2v),
+            ("held_out_v2f", self.held_out_v2f),
+        ];
+        match errors.iter().find(|(_, e)| !(e.is_finite() && *e >= 0.0)) {
+            Some((name, e)) => Err(format!("{name} is {e} (an error must be finite and not negative)")),
+            None => Ok(()),
+        }
+    }
+}
