@@ -924,10 +924,12 @@ const BUCKET_BITS: u32 = 12;
 /// The `n`-th smallest of all ranked costs (from 0), in `f64::total_cmp`'s order,
 /// exactly. Counting the costs per binade finds the binade that holds it; only that
 /// binade's costs are copied and selected in, so the pass's peak memory is not a copy
-/// of every cost (12 MB on a million faces).
+/// of every cost (12 MB on a million faces). The counts are `u32`s on the stack (16 KB;
+/// a heap vector per call cost 0.1 M more instructions on SCAPE): 2³² edges would take
+/// 2.9 G faces, 34 GB of indices alone.
 fn nth_smallest_cost(ranked: &EdgeCosts, n: usize) -> f64 {
     let bucket = |cost: f64| (total_order_key(cost) >> (64 - BUCKET_BITS)) as usize;
-    let mut counts = vec![0usize; 1 << BUCKET_BITS];
+    let mut counts = [0u32; 1 << BUCKET_BITS];
     for c in &ranked.chunks {
         for &cost in &c.costs {
             counts[bucket(cost)] += 1;
@@ -936,13 +938,13 @@ fn nth_smallest_cost(ranked: &EdgeCosts, n: usize) -> f64 {
     let mut below = 0;
     let mut target = 0;
     for (b, &count) in counts.iter().enumerate() {
-        if below + count > n {
+        if below + count as usize > n {
             target = b;
             break;
         }
-        below += count;
+        below += count as usize;
     }
-    let mut keys: Vec<u64> = Vec::with_capacity(counts[target]);
+    let mut keys: Vec<u64> = Vec::with_capacity(counts[target] as usize);
     for c in &ranked.chunks {
         // Each key computed once, its bucket read off it.
         keys.extend(
