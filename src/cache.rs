@@ -373,11 +373,12 @@ impl Cache {
     /// Removes every entry whose key is not in `keep` (hex keys), each by
     /// rename-then-delete, plus dead runs' leftovers; returns `(entries kept, entries
     /// removed, bytes freed)`. `desal cache gc` passes the keys of a pipeline's stages.
-    /// An entry of a stage no pipeline key names (`desal eval`'s floor) is kept when
-    /// every input its `key.json` records is in `inputs` (content hashes).
+    /// An entry of `derived_stage` (`desal eval`'s floor, which no pipeline key names) is
+    /// kept when every input its `key.json` records is in `inputs` (content hashes).
     pub fn gc(
         &self,
         keep: &std::collections::BTreeSet<String>,
+        derived_stage: &str,
         inputs: &std::collections::BTreeSet<ContentHash>,
     ) -> Result<(usize, usize, u64)> {
         let (mut kept, mut removed, mut freed) = (0, 0, 0);
@@ -396,7 +397,7 @@ impl Cache {
                 if name.starts_with('.') || !entry.path().is_dir() {
                     continue;
                 }
-                if keep.contains(&name) || uses_only(&entry.path(), inputs) {
+                if keep.contains(&name) || uses_only(&entry.path(), derived_stage, inputs) {
                     kept += 1;
                     continue;
                 }
@@ -421,12 +422,12 @@ impl Cache {
     }
 }
 
-/// Whether the entry at `dir` is an eval-derived one (`floor`) whose recorded inputs are
-/// all in `inputs`. A stage's own entries are kept by key only.
-fn uses_only(dir: &Path, inputs: &std::collections::BTreeSet<ContentHash>) -> bool {
+/// Whether the entry at `dir` is one of `derived_stage` whose recorded inputs are all in
+/// `inputs`. A stage's own entries are kept by key only.
+fn uses_only(dir: &Path, derived_stage: &str, inputs: &std::collections::BTreeSet<ContentHash>) -> bool {
     match desal_io::atomic::read_json::<StageKey>(&dir.join("key.json")) {
         Ok(key) => {
-            key.stage == crate::evaluate::floor::STAGE
+            key.stage == derived_stage
                 && !key.inputs.is_empty()
                 && key.inputs.iter().all(|(_, hash)| inputs.contains(hash))
         }

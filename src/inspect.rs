@@ -65,6 +65,11 @@ pub fn describe(path: &Path) -> Result<String> {
                 writeln!(out, "    part {k:>2} {:<16} {} vertices", labels.names[k], members.len())?;
             }
         }
+        // `desal eval`'s own entry, not a stage's.
+        ArtifactKind::Floor => {
+            let (_, body, _) = artifact::read_artifact::<desal_io::artifact::FloorV1>(path)?;
+            crate::evaluate::floor::describe(&body, &mut out)?;
+        }
         _ => crate::stages::describe_stage_artifact(path, header.kind, &mut out)?,
     }
     Ok(out)

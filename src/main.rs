@@ -142,7 +142,7 @@ fn run(cli: Cli) -> Result<()> {
             // `desal eval`'s floors of these pose sets and labels are kept too.
             let inputs = runs.iter().flat_map(|r| [r.stages.poses.hash, r.stages.labels.hash]).collect();
             let cache = desal::cache::Cache::new(cache_dir.unwrap_or_else(|| loaded.out_root.join(".cache")));
-            let (kept, removed, freed) = cache.gc(&keep, &inputs)?;
+            let (kept, removed, freed) = cache.gc(&keep, desal::evaluate::floor::STAGE, &inputs)?;
             println!(
                 "{}: kept {kept} entries, removed {removed} ({:.1} MB)",
                 cache.root().display(),

@@ -250,9 +250,6 @@ pub fn describe_stage_artifact(path: &std::path::Path, kind: ArtifactKind, out: 
         ArtifactKind::Simplified => simplify::describe(&read_artifact::<SimplifiedV1>(path)?.1, out),
         ArtifactKind::Map => map::describe(&read_artifact::<MapV1>(path)?.1, out),
         ArtifactKind::HierarchyLevel => hierarchy::describe(&read_artifact::<HierarchyLevelV1>(path)?.1, out),
-        ArtifactKind::Floor => {
-            crate::evaluate::floor::describe(&read_artifact::<desal_io::artifact::FloorV1>(path)?.1, out)?
-        }
         _ => writeln!(out, "    ({kind} artifacts are summarised once their stage is wired in)")?,
     }
     Ok(())
