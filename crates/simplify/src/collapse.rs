@@ -417,7 +417,10 @@ impl Engine {
         let unchanged = |a: u32, b: u32| {
             self.modified_in_pass[a as usize] < last && self.modified_in_pass[b as usize] < last
         };
-        let capacity = if have_previous { old.his.len() } else { 3 * slots.len() };
+        // The first pass lists each edge once, at its lower end: about three per slot on
+        // a closed mesh, and 3⅛ leaves the chunks above the mean room (−0.2 M instructions
+        // on SCAPE against 3, whose vectors grew).
+        let capacity = if have_previous { old.his.len() } else { 25 * slots.len() / 8 };
         let mut out = ChunkEdges {
             first: slots.start,
             his: Vec::with_capacity(capacity),
