@@ -846,7 +846,6 @@ with_avx2_clone! {
         // is one comparison with `limit`, or with the largest finite value when `limit` is
         // infinite.
         let bound = if limit == f64::INFINITY { f64::MAX } else { limit };
-        // Counted first, so that the order is allocated once at its size.
         // Allocated once for every edge: no growth copies. The pages past the kept edges
         // are never written, so they cost address space, not memory (geo_1m's peak RSS
         // did not move); counting the kept edges first cost 0.2 M more instructions.
