@@ -221,6 +221,12 @@ impl Cache {
         Cache { root: root.into() }
     }
 
+    /// The cache at `cache_dir`, or by default `<out_root>/.cache` (`--cache-dir`'s rule
+    /// for `desal run`, `desal eval` and `desal cache gc`).
+    pub fn for_output(cache_dir: Option<&Path>, out_root: &Path) -> Self {
+        Cache::new(cache_dir.map_or_else(|| out_root.join(".cache"), Path::to_path_buf))
+    }
+
     pub fn root(&self) -> &Path {
         &self.root
     }

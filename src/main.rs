@@ -141,7 +141,7 @@ fn run(cli: Cli) -> Result<()> {
                 runs.iter().flat_map(|r| r.report.stages.iter().map(|s| s.cache_key.clone())).collect();
             // `desal eval`'s floors of these pose sets and labels are kept too.
             let inputs = runs.iter().flat_map(|r| [r.stages.poses.hash, r.stages.labels.hash]).collect();
-            let cache = desal::cache::Cache::new(cache_dir.unwrap_or_else(|| loaded.out_root.join(".cache")));
+            let cache = desal::cache::Cache::for_output(cache_dir.as_deref(), &loaded.out_root);
             let (kept, removed, freed) = cache.gc(&keep, desal::evaluate::floor::STAGE, &inputs)?;
             println!(
                 "{}: kept {kept} entries, removed {removed} ({:.1} MB)",

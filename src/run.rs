@@ -111,7 +111,7 @@ pub struct DatasetRun {
 
 /// Runs a pipeline and keeps every dataset's stage results (in file order).
 pub fn run_with_stages(pipeline: &Pipeline, options: &RunOptions) -> Result<Vec<DatasetRun>> {
-    let cache = Cache::new(options.cache_dir.clone().unwrap_or_else(|| pipeline.out_root.join(".cache")));
+    let cache = Cache::for_output(options.cache_dir.as_deref(), &pipeline.out_root);
     let selected = match options.shard {
         Some(shard) => shard.select(pipeline.datasets.len()),
         None => (0..pipeline.datasets.len()).collect(),

@@ -1,7 +1,7 @@
 //! The model's own floor, cached: `desal_eval::model_floor` fits the deformation model
 //! on the full-resolution pose set six times (in-sample and per fold) and measures 140
-//! syntheses on SCAPE, about 40 % of a one-method eval's instructions, and it depends on
-//! nothing a method changes. So it is a cache entry like a stage's (`<cache>/floor/<key>`,
+//! syntheses on SCAPE (6.9 s of a 20 s `desal eval pipelines/scape.toml --methods
+//! qslim-optimal`, its log says), and it depends on nothing a method changes. So it is a cache entry like a stage's (`<cache>/floor/<key>`,
 //! [`crate::cache`]), keyed on:
 //!
 //! | field | what |
@@ -68,9 +68,14 @@ pub struct Floor {
     pub seconds: f64,
 }
 
-/// The floor under `key`: from the cache when its entry is sound, else `measure()`d and
-/// stored.
-pub fn cached(cache: &Cache, key: &StageKey, measure: impl FnOnce() -> Result<ModelFloor>) -> Result<Floor> {
+/// The floor under `key` (of the model named `name`): from the cache when its entry is
+/// sound, else `measure()`d and stored.
+pub fn cached(
+    cache: &Cache,
+    key: &StageKey,
+    name: &str,
+    measure: impl FnOnce() -> Result<ModelFloor>,
+) -> Result<Floor> {
     let started = Instant::now();
     let entry = cache.entry_dir(key).join("artifact.dsa");
     if cache.lookup::<FloorV1>(key).is_some() {
@@ -88,19 +93,14 @@ pub fn cached(cache: &Cache, key: &StageKey, measure: impl FnOnce() -> Result<Mo
         }
     }
     let floor = measure()?;
-    let body = to_body(key, &floor);
+    let body = to_body(name, &floor);
     cache.store(key, &key.producer(&[]), &body, &body)?;
     Ok(Floor { floor, cached: false, seconds: started.elapsed().as_secs_f64() })
 }
 
-fn to_body(key: &StageKey, floor: &ModelFloor) -> FloorV1 {
-    #[derive(serde::Deserialize)]
-    struct Parameters {
-        model: String,
-    }
-    let model = serde_json::from_str::<Parameters>(&key.parameters).map(|p| p.model).unwrap_or_default();
+fn to_body(name: &str, floor: &ModelFloor) -> FloorV1 {
     FloorV1 {
-        model,
+        model: name.to_owned(),
         poses: floor.pose_count as u32,
         folds: floor.fold_count as u32,
         in_sample_v2v: floor.in_sample.v2v,
