@@ -142,6 +142,55 @@ with_avx2_clone! {
     }
 }
 
+/// Edges of the listing sweep waiting to be costed four at a time by
+/// [`Engine::costs_of`] (optimal quadric placement; otherwise each is costed at once by
+/// [`Engine::cost_of`]): lane `l` is edge `edges[l]`, whose cost goes to `costs[at[l]]`.
+struct CostBatch {
+    four: bool,
+    edges: [[u32; 2]; 4],
+    at: [usize; 4],
+    len: usize,
+}
+
+impl CostBatch {
+    fn new(four: bool) -> Self {
+        Self { four, edges: [[0; 2]; 4], at: [0; 4], len: 0 }
+    }
+
+    /// Costs edge `(a, b)` into the last entry of `costs`.
+    #[inline(always)]
+    fn cost(&mut self, engine: &Engine, costs: &mut [f64], a: u32, b: u32) {
+        self.cost_at(engine, costs, costs.len() - 1, a, b);
+    }
+
+    /// Costs edge `(a, b)` into `costs[at]`, now or once four are waiting.
+    #[inline(always)]
+    fn cost_at(&mut self, engine: &Engine, costs: &mut [f64], at: usize, a: u32, b: u32) {
+        if !self.four {
+            costs[at] = engine.cost_of(a, b);
+            return;
+        }
+        self.edges[self.len] = [a, b];
+        self.at[self.len] = at;
+        self.len += 1;
+        if self.len == 4 {
+            let four = engine.costs_of(self.edges);
+            for (&at, cost) in self.at.iter().zip(four) {
+                costs[at] = cost;
+            }
+            self.len = 0;
+        }
+    }
+
+    /// Costs the edges still waiting (fewer than four), one by one.
+    fn finish(&mut self, engine: &Engine, costs: &mut [f64]) {
+        for (&[a, b], &at) in self.edges.iter().zip(&self.at).take(self.len) {
+            costs[at] = engine.cost_of(a, b);
+        }
+        self.len = 0;
+    }
+}
+
 /// How a pass performs its ranked collapses.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Pass {
@@ -428,6 +477,9 @@ impl Engine {
             start: Vec::with_capacity(slots.len()),
         };
         let mut upper: Vec<u32> = Vec::with_capacity(16);
+        let mut batch = CostBatch::new(
+            self.params.placement == Placement::Optimal && self.params.metric == Metric::Quadric,
+        );
         let touched = |v: u32| !have_previous || self.touched_in_pass[v as usize] >= last;
         let mut v = slots.start;
         while v < slots.end {
@@ -445,7 +497,10 @@ impl Engine {
                         let listed = j < old_his.len() && old_his[j] == x;
                         let reused = (listed && reuse_costs && unchanged(v, x)).then(|| old_costs[j]);
                         out.his.push(x);
-                        out.costs.push(reused.unwrap_or_else(|| self.cost_of(v, x)));
+                        out.costs.push(reused.unwrap_or(f64::NAN));
+                        if reused.is_none() {
+                            batch.cost(self, &mut out.costs, v, x);
+                        }
                     }
                 }
                 v += 1;
@@ -477,7 +532,7 @@ impl Engine {
                 while slot + 1 < j && out.start[slot + 1] as usize <= e {
                     slot += 1;
                 }
-                out.costs[e] = self.cost_of(slots.start + slot as u32, x);
+                batch.cost_at(self, &mut out.costs, e, slots.start + slot as u32, x);
             }
             #[cfg(debug_assertions)]
             for u in v..w {
@@ -493,6 +548,7 @@ impl Engine {
             }
             v = w;
         }
+        batch.finish(self, &mut out.costs);
         out
     }
 

@@ -36,6 +36,7 @@ mod collapse;
 mod config;
 mod error;
 mod face_lists;
+mod lanes;
 mod lindstrom_turk;
 mod marks;
 mod names;

@@ -9,7 +9,9 @@ use desal_mesh::Vec3;
 use crate::classify::{FROZEN, PINNED};
 use crate::collapse::{Candidate, Engine};
 use crate::config::{Metric, Placement};
+use crate::lanes::{Lanes, Points, four};
 use crate::lindstrom_turk::Neighbourhood;
+use crate::quadric::Quadric4;
 
 /// Relative margin by which a computed placement must beat the better endpoint's error
 /// to be used instead of it (rounding noise must not move a vertex off its position).
@@ -189,6 +191,51 @@ impl Engine {
         cost
     }
 
+    /// [`Self::cost_of`] of four edges at once, bit for bit (asserted in debug builds):
+    /// the common case, a well-conditioned minimiser near the edge, in four lanes, and
+    /// any lane off it (a frozen or pinned endpoint, the segment or endpoint fallback)
+    /// by `cost_of` alone. For optimal quadric placement only; inlined by force into
+    /// the listing sweep, whose AVX2 clone runs the lanes as vectors.
+    #[inline(always)]
+    pub(crate) fn costs_of(&self, edges: [[u32; 2]; 4]) -> [f64; 4] {
+        debug_assert!(self.params.placement == Placement::Optimal && self.params.metric == Metric::Quadric);
+        let (a, b) = (four(|l| edges[l][0] as usize), four(|l| edges[l][1] as usize));
+        let q = Quadric4::sums(four(|l| (&self.quadrics[a[l]], &self.quadrics[b[l]])));
+        let pa = Points::of(four(|l| &self.positions[a[l]]));
+        let pb = Points::of(four(|l| &self.positions[b[l]]));
+        let (error_a, error_b) = (q.eval(&pa), q.eval(&pb));
+        let half = Lanes::splat(0.5);
+        let mid = Points { x: (pa.x + pb.x) * half, y: (pa.y + pb.y) * half, z: (pa.z + pb.z) * half };
+        let reach = Lanes::splat(self.params.max_placement_distance) * pa.distance(&pb);
+        let (p, regular) = q.minimiser();
+        let near = p.distance(&mid).le(reach);
+        let error = q.eval(&p);
+        let mut costs = [0.0; 4];
+        for (l, cost) in costs.iter_mut().enumerate() {
+            let [a, b] = edges[l];
+            if !(regular[l] && near[l])
+                || (self.flags[a as usize] | self.flags[b as usize]) & (FROZEN | PINNED) != 0
+            {
+                *cost = self.cost_of(a, b);
+                continue;
+            }
+            // `optimal_position`'s choice, and `cost_of`'s factors.
+            let endpoint_error = if error_b.0[l] < error_a.0[l] { error_b.0[l] } else { error_a.0[l] };
+            let error = error.0[l].max(0.0);
+            let chosen =
+                if endpoint_error > error * (1.0 + SNAP_TOLERANCE) { error } else { endpoint_error.max(0.0) };
+            let (pa, pb) = (&self.positions[a as usize], &self.positions[b as usize]);
+            let factored = self.cost_factors(a, b, chosen, pa, pb);
+            *cost = if factored.is_finite() { factored } else { f64::INFINITY };
+            debug_assert_eq!(
+                cost.to_bits(),
+                self.cost_of(a, b).to_bits(),
+                "four-lane cost of edge ({a}, {b})"
+            );
+        }
+        costs
+    }
+
     /// The endpoint the seam rule keeps when it lets only the other one go (`None`: both
     /// may go, or neither, which `check_seam_rule` refuses).
     #[inline]
@@ -250,4 +297,67 @@ impl Pinned {
 fn nearer_endpoint(a: u32, b: u32, pa: &Vec3, pb: &Vec3, position: &Vec3) -> u32 {
     let (da, db) = ((position - pa).norm_squared(), (position - pb).norm_squared());
     if da < db || (da == db && a < b) { a } else { b }
+}
+
+#[cfg(test)]
+mod tests {
+    use desal_mesh::{TriMesh, Vec3};
+
+    use crate::collapse::Engine;
+    use crate::config::{Metric, SimplifyConfig};
+
+    /// A grid of `n × n` quads, flat except for a bump in its middle: flat regions have
+    /// singular quadrics (the segment or endpoint fallback), the bump regular ones, and
+    /// the border constraint planes.
+    fn bumped_grid(n: usize) -> TriMesh {
+        let mut positions = Vec::new();
+        for i in 0..=n {
+            for j in 0..=n {
+                let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
+                let r2 = (x - 0.5).powi(2) + (y - 0.5).powi(2);
+                positions.push(Vec3::new(x, y, 0.3 * (-r2 * 20.0).exp() * (1.0 + 0.1 * (17.0 * x).sin())));
+            }
+        }
+        let at = |i: usize, j: usize| (i * (n + 1) + j) as u32;
+        let mut faces = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                faces.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+                faces.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+            }
+        }
+        TriMesh { positions, faces }
+    }
+
+    /// The four-lane cost is bit for bit the one-edge cost, for every edge of the grid
+    /// in groups of four, with and without the saliency-free factors (edge length,
+    /// normalised error), and whatever mix of regular and fallback lanes a group holds.
+    #[test]
+    fn four_lane_costs_are_the_one_edge_costs() {
+        let mesh = bumped_grid(12);
+        let mut edges: Vec<[u32; 2]> = mesh
+            .faces
+            .iter()
+            .flat_map(|&[a, b, c]| [[a, b], [b, c], [c, a]])
+            .map(|[a, b]| [a.min(b), a.max(b)])
+            .collect();
+        edges.sort_unstable();
+        edges.dedup();
+        for (balance, normalized_error) in [(false, false), (true, false), (false, true), (true, true)] {
+            let config = SimplifyConfig { balance, normalized_error, ..SimplifyConfig::default() };
+            let input = crate::SimplifyInput::new(&mesh);
+            let engine = Engine::new(&[mesh.positions.as_slice()], 0, &input, mesh.faces.clone(), &config);
+            assert_eq!(engine.params.metric, Metric::Quadric);
+            let mut fallbacks = 0;
+            for group in edges.chunks_exact(4) {
+                let group: [[u32; 2]; 4] = group.try_into().expect("four");
+                let four = engine.costs_of(group);
+                for (&[a, b], cost) in group.iter().zip(four) {
+                    assert_eq!(cost.to_bits(), engine.cost_of(a, b).to_bits(), "edge ({a}, {b}): {cost}");
+                    fallbacks += usize::from(engine.quadrics[a as usize].minimiser().is_none());
+                }
+            }
+            assert!(fallbacks > 0, "the flat part of the grid has singular quadrics");
+        }
+    }
 }

@@ -4,6 +4,8 @@
 
 use desal_mesh::Vec3;
 
+use crate::lanes::{Lanes, Points, four};
+
 /// A symmetric 4×4 quadric in its ten distinct coefficients, plus `area`: the total
 /// area of the faces whose planes it sums (constraint planes add no area), so that
 /// `eval(x) / area` is a mean squared distance in squared mesh units.
@@ -197,6 +199,82 @@ impl Quadric {
         }
         let t = (-slope / curvature).clamp(0.0, 1.0);
         Some(p0 + d * t)
+    }
+}
+
+/// Four quadrics, one per lane: the sums of four pairs, for costing four edges at once
+/// with the arithmetic of [`Quadric::eval`] and [`Quadric::minimiser`] written in the same
+/// order (each lane is bit for bit the scalar result; `placement.rs` asserts it in debug
+/// builds). No `area`: the placement does not read it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Quadric4 {
+    a00: Lanes,
+    a01: Lanes,
+    a02: Lanes,
+    a11: Lanes,
+    a12: Lanes,
+    a22: Lanes,
+    b0: Lanes,
+    b1: Lanes,
+    b2: Lanes,
+    c: Lanes,
+}
+
+impl Quadric4 {
+    /// Lane `l` is `pairs[l].0 + pairs[l].1`, added as `Quadric + Quadric` adds.
+    #[inline(always)]
+    pub(crate) fn sums(pairs: [(&Quadric, &Quadric); 4]) -> Self {
+        let sum = |f: fn(&Quadric) -> f64| Lanes::from_fn(|l| f(pairs[l].0) + f(pairs[l].1));
+        Self {
+            a00: sum(|q| q.a00),
+            a01: sum(|q| q.a01),
+            a02: sum(|q| q.a02),
+            a11: sum(|q| q.a11),
+            a12: sum(|q| q.a12),
+            a22: sum(|q| q.a22),
+            b0: sum(|q| q.b0),
+            b1: sum(|q| q.b1),
+            b2: sum(|q| q.b2),
+            c: sum(|q| q.c),
+        }
+    }
+
+    /// [`Quadric::eval`], lane-wise.
+    #[inline(always)]
+    pub(crate) fn eval(&self, p: &Points) -> Lanes {
+        let (x, y, z) = (p.x, p.y, p.z);
+        let two = Lanes::splat(2.0);
+        x * (self.a00 * x + two * (self.a01 * y + self.a02 * z + self.b0))
+            + y * (self.a11 * y + two * (self.a12 * z + self.b1))
+            + z * (self.a22 * z + two * self.b2)
+            + self.c
+    }
+
+    /// [`Quadric::minimiser`], lane-wise: the points, and which lanes have one (lanes
+    /// without hold garbage).
+    #[inline(always)]
+    pub(crate) fn minimiser(&self) -> (Points, [bool; 4]) {
+        let c00 = self.a11 * self.a22 - self.a12 * self.a12;
+        let c01 = self.a02 * self.a12 - self.a01 * self.a22;
+        let c02 = self.a01 * self.a12 - self.a02 * self.a11;
+        let det = self.a00 * c00 + self.a01 * c01 + self.a02 * c02;
+        let scale = (self.a00 + self.a11 + self.a22) / Lanes::splat(3.0);
+        let regular = det.abs().gt(Lanes::splat(DET_EPSILON) * scale * scale * scale);
+        let c11 = self.a00 * self.a22 - self.a02 * self.a02;
+        let c12 = self.a01 * self.a02 - self.a00 * self.a12;
+        let c22 = self.a00 * self.a11 - self.a01 * self.a01;
+        let inv = Lanes::splat(1.0) / det;
+        let (b0, b1, b2) = (-self.b0, -self.b1, -self.b2);
+        let p = Points {
+            x: (c00 * b0 + c01 * b1 + c02 * b2) * inv,
+            y: (c01 * b0 + c11 * b1 + c12 * b2) * inv,
+            z: (c02 * b0 + c12 * b1 + c22 * b2) * inv,
+        };
+        // `all_finite`, lane-wise.
+        #[expect(clippy::eq_op, reason = "`x - x` is the test")]
+        let zero = (p.x - p.x) + (p.y - p.y) + (p.z - p.z);
+        let valid = four(|l| regular[l] && zero.0[l] == 0.0);
+        (p, valid)
     }
 }
 
