@@ -168,12 +168,12 @@ impl FaceLists {
 #[inline]
 fn keep_alive(run: &mut [u32], alive: &[bool]) -> usize {
     let mut live = 0;
+    // Branch-free: every face is written at the cursor, which moves past the live
+    // ones only (a dead face is a coin toss to the branch predictor).
     for i in 0..run.len() {
         let f = run[i];
-        if alive[f as usize] {
-            run[live] = f;
-            live += 1;
-        }
+        run[live] = f;
+        live += usize::from(alive[f as usize]);
     }
     live
 }
