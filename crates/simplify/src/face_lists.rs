@@ -53,8 +53,10 @@ impl FaceLists {
     /// The live faces around slot `v`.
     #[inline]
     pub(crate) fn of(&self, v: u32) -> &[u32] {
-        let s = self.start[v as usize] as usize;
-        &self.refs[s..s + self.len[v as usize] as usize]
+        // `len` sliced to `start`'s length: one bounds check covers both.
+        let (start, len) = (&self.start[..], &self.len[..self.start.len()]);
+        let s = start[v as usize] as usize;
+        &self.refs[s..s + len[v as usize] as usize]
     }
 
     /// The number of live faces around slot `v` (its fan size).

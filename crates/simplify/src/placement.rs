@@ -147,8 +147,11 @@ impl Engine {
     /// −0.7 M instructions on SCAPE at c807891, where it had cost +0.3 M at f81532d).
     #[inline(always)]
     fn optimal_position(&self, a: u32, b: u32) -> (Vec3, f64) {
-        let q = self.quadrics[a as usize] + self.quadrics[b as usize];
-        let (pa, pb) = (self.positions[a as usize], self.positions[b as usize]);
+        // One slot count for both arrays (as in `costs_of`).
+        let positions = &self.positions[..];
+        let quadrics = &self.quadrics[..positions.len()];
+        let (pa, pb) = (positions[a as usize], positions[b as usize]);
+        let q = quadrics[a as usize] + quadrics[b as usize];
         let (error_a, error_b) = (q.eval(&pa), q.eval(&pb));
         let (endpoint, endpoint_error) = if error_b < error_a { (pb, error_b) } else { (pa, error_a) };
         let mid = (pa + pb) * 0.5;
@@ -200,9 +203,13 @@ impl Engine {
     pub(crate) fn costs_of(&self, edges: [[u32; 2]; 4]) -> [f64; 4] {
         debug_assert!(self.params.placement == Placement::Optimal && self.params.metric == Metric::Quadric);
         let (a, b) = (four(|l| edges[l][0] as usize), four(|l| edges[l][1] as usize));
-        let q = Quadric4::sums(four(|l| (&self.quadrics[a[l]], &self.quadrics[b[l]])));
-        let pa = Points::of(four(|l| &self.positions[a[l]]));
-        let pb = Points::of(four(|l| &self.positions[b[l]]));
+        // One slot count for both arrays (single pose: a quadric per slot), so that one
+        // bounds check per vertex covers both.
+        let positions = &self.positions[..];
+        let quadrics = &self.quadrics[..positions.len()];
+        let pa = Points::of(four(|l| &positions[a[l]]));
+        let pb = Points::of(four(|l| &positions[b[l]]));
+        let q = Quadric4::sums(four(|l| (&quadrics[a[l]], &quadrics[b[l]])));
         let (error_a, error_b) = (q.eval(&pa), q.eval(&pb));
         let half = Lanes::splat(0.5);
         let mid = Points { x: (pa.x + pb.x) * half, y: (pa.y + pb.y) * half, z: (pa.z + pb.z) * half };
@@ -210,12 +217,11 @@ impl Engine {
         let (p, regular) = q.minimiser();
         let near = p.distance(&mid).le(reach);
         let error = q.eval(&p);
+        let flags = &self.flags[..positions.len()];
         let mut costs = [0.0; 4];
         for (l, cost) in costs.iter_mut().enumerate() {
             let [a, b] = edges[l];
-            if !(regular[l] && near[l])
-                || (self.flags[a as usize] | self.flags[b as usize]) & (FROZEN | PINNED) != 0
-            {
+            if !(regular[l] && near[l]) || (flags[a as usize] | flags[b as usize]) & (FROZEN | PINNED) != 0 {
                 *cost = self.cost_of(a, b);
                 continue;
             }
@@ -224,7 +230,7 @@ impl Engine {
             let error = error.0[l].max(0.0);
             let chosen =
                 if endpoint_error > error * (1.0 + SNAP_TOLERANCE) { error } else { endpoint_error.max(0.0) };
-            let (pa, pb) = (&self.positions[a as usize], &self.positions[b as usize]);
+            let (pa, pb) = (&positions[a as usize], &positions[b as usize]);
             let factored = self.cost_factors(a, b, chosen, pa, pb);
             *cost = if factored.is_finite() { factored } else { f64::INFINITY };
             debug_assert_eq!(

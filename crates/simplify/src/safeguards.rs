@@ -147,7 +147,10 @@ impl Engine {
             if face.contains(&other) {
                 continue;
             }
-            let p = &self.positions;
+            // One slot count for positions and normals, so that one bounds check per
+            // corner covers both.
+            let p = &self.positions[..];
+            let n = &self.vertex_normals[..p.len()];
             let [c0, c1, c2] = [p[face[0] as usize], p[face[1] as usize], p[face[2] as usize]];
             let old = (c1 - c0).cross(&(c2 - c0));
             // `moved` is exactly one corner: the face is in its list, and has three. The
@@ -187,7 +190,6 @@ impl Engine {
             // The corners' input normals summed, `moved`'s counting for both merged
             // vertices (only the sign of a zero sum differs from starting at zero, and
             // the comparison below cannot see it).
-            let n = &self.vertex_normals;
             let [m0, m1, m2] = [n[face[0] as usize], n[face[1] as usize], n[face[2] as usize]];
             let reference = match at {
                 0 => (m0 + n[other as usize]) + m1 + m2,
