@@ -88,14 +88,6 @@ impl Mul for Lanes {
     }
 }
 
-impl Mul<f64> for Lanes {
-    type Output = Self;
-    #[inline(always)]
-    fn mul(self, o: f64) -> Self {
-        self * Self::splat(o)
-    }
-}
-
 impl Div for Lanes {
     type Output = Self;
     #[inline(always)]

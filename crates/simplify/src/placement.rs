@@ -201,7 +201,9 @@ impl Engine {
     /// the listing sweep, whose AVX2 clone runs the lanes as vectors.
     #[inline(always)]
     pub(crate) fn costs_of(&self, edges: [[u32; 2]; 4]) -> [f64; 4] {
+        // Optimal placement is single-pose only (`simplify_multipose` places on a subset).
         debug_assert!(self.params.placement == Placement::Optimal && self.params.metric == Metric::Quadric);
+        debug_assert_eq!(self.pose_count, 1);
         let (a, b) = (four(|l| edges[l][0] as usize), four(|l| edges[l][1] as usize));
         // One slot count for both arrays (single pose: a quadric per slot), so that one
         // bounds check per vertex covers both.
@@ -309,8 +311,9 @@ fn nearer_endpoint(a: u32, b: u32, pa: &Vec3, pb: &Vec3, position: &Vec3) -> u32
 mod tests {
     use desal_mesh::{TriMesh, Vec3};
 
+    use crate::classify::PINNED;
     use crate::collapse::Engine;
-    use crate::config::{Metric, SimplifyConfig};
+    use crate::config::{Metric, PartBorders, SimplifyConfig};
 
     /// A grid of `n × n` quads, flat except for a bump in its middle: flat regions have
     /// singular quadrics (the segment or endpoint fallback), the bump regular ones, and
@@ -336,8 +339,10 @@ mod tests {
     }
 
     /// The four-lane cost is bit for bit the one-edge cost, for every edge of the grid
-    /// in groups of four, with and without the saliency-free factors (edge length,
-    /// normalised error), and whatever mix of regular and fallback lanes a group holds.
+    /// in groups of four, with each factor of Eq. 5 on and off (edge length, normalised
+    /// error, saliency weights), and whatever mix of regular and fallback lanes a group
+    /// holds (singular quadrics on the flat part, pinned endpoints on a locked part
+    /// border).
     #[test]
     fn four_lane_costs_are_the_one_edge_costs() {
         let mesh = bumped_grid(12);
@@ -349,21 +354,39 @@ mod tests {
             .collect();
         edges.sort_unstable();
         edges.dedup();
-        for (balance, normalized_error) in [(false, false), (true, false), (false, true), (true, true)] {
-            let config = SimplifyConfig { balance, normalized_error, ..SimplifyConfig::default() };
-            let input = crate::SimplifyInput::new(&mesh);
+        let weights: Vec<f64> = (0..mesh.positions.len()).map(|v| 1.0 + (v % 7) as f64 * 0.3).collect();
+        let labels: Vec<u32> = mesh.positions.iter().map(|p| u32::from(p.x > 0.6)).collect();
+        for mask in 0..16u32 {
+            let bit = |b: u32| mask & (1 << b) != 0;
+            let config = SimplifyConfig {
+                balance: bit(0),
+                normalized_error: bit(1),
+                part_borders: if bit(3) { PartBorders::Lock } else { PartBorders::Ignore },
+                ..SimplifyConfig::default()
+            };
+            let mut input = crate::SimplifyInput::new(&mesh).with_part_labels(&labels);
+            if bit(2) {
+                input = input.with_weights(&weights);
+            }
             let engine = Engine::new(&[mesh.positions.as_slice()], 0, &input, mesh.faces.clone(), &config);
             assert_eq!(engine.params.metric, Metric::Quadric);
-            let mut fallbacks = 0;
+            let (mut singular, mut pinned) = (0, 0);
             for group in edges.chunks_exact(4) {
                 let group: [[u32; 2]; 4] = group.try_into().expect("four");
                 let four = engine.costs_of(group);
                 for (&[a, b], cost) in group.iter().zip(four) {
-                    assert_eq!(cost.to_bits(), engine.cost_of(a, b).to_bits(), "edge ({a}, {b}): {cost}");
-                    fallbacks += usize::from(engine.quadrics[a as usize].minimiser().is_none());
+                    assert_eq!(
+                        cost.to_bits(),
+                        engine.cost_of(a, b).to_bits(),
+                        "edge ({a}, {b}), mask {mask}: {cost}"
+                    );
+                    singular += usize::from(engine.quadrics[a as usize].minimiser().is_none());
+                    pinned +=
+                        usize::from((engine.flags[a as usize] | engine.flags[b as usize]) & PINNED != 0);
                 }
             }
-            assert!(fallbacks > 0, "the flat part of the grid has singular quadrics");
+            assert!(singular > 0, "the flat part of the grid has singular quadrics");
+            assert_eq!(pinned > 0, bit(3), "a locked border pins its vertices (mask {mask})");
         }
     }
 }
