@@ -5,8 +5,9 @@
 //!
 //! The story, as [`run_engine`] tells it: fill the face quadrics, classify every vertex
 //! and fill its quadric (`classify.rs`); then, in passes until the target: pick the live
-//! edges, rank them by cost in parallel (an edge with no endpoint changed by the last
-//! pass keeps its cost: the quadric cost depends on the endpoints alone), sort the cheap
+//! edges, rank them by cost in parallel, four edges at a time in `f64` lanes
+//! (`Engine::costs_of`; an edge with no endpoint changed by the last pass keeps its
+//! cost: the quadric cost depends on the endpoints alone), sort the cheap
 //! ones, choose in cost order those that share no endpoint, and perform them, each
 //! evaluated again on the current mesh (`placement.rs`) and re-checked against the
 //! safeguards (`safeguards.rs`: the seam rule, link condition, fold-over against
