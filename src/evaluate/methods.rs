@@ -7,6 +7,7 @@
 //! | `saliency-optimal`, `saliency-subset` | cost × saliency weight | greedy / subset |
 //! | `paper-optimal`, `paper-subset` | cost × saliency × edge length (the paper, Eq. 5) | greedy / subset |
 //! | `desal` | desal's own (issue 17): the template's quadrics, each collapse ranked by its error per unit area (`normalized_error`, meshoptimizer's normalisation), no saliency, no balance (EVAL.md, "desal") | subset |
+//! | `desal-refit` | `desal`, then again with saliency weights from where `desal`'s mesh deforms worse than the full one under the eval's model, fitted in-sample (`refit.rs`); needs a pose model (not `--model rig`); named explicitly, not in `all` | subset |
 //! | `multipose` | Mohr & Gleicher 2003: quadrics summed over all poses, no saliency | subset |
 //! | `multipose-saliency`, `multipose-paper` | the same quadrics, the cost × saliency weight (and × edge length): issue 17's "saliency with multi-pose quadrics", measured worse than `multipose` (EVAL.md); named explicitly, not in `all` | subset |
 //! | `multipose-normalized` | the same quadrics, each collapse ranked by its error per unit area as `desal`'s: measured worse than `desal` in v2v and than `multipose` in v2f (EVAL.md); named explicitly, not in `all` | subset |
@@ -19,10 +20,13 @@
 //! rule; `subset` placement keeps original vertices, so the map is exact. Every other
 //! stage-3 setting (boundary weight, part borders, safeguards) is the pipeline's.
 
+use std::borrow::Cow;
 use std::path::PathBuf;
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
+use desal_eval::PoseModel;
 use desal_map::MapOutput;
 use desal_mesh::{NoProgress, PartLabels, PoseSet, TriMesh};
 use desal_simplify::{Placement, SimplifyConfig, StopReason, Target};
@@ -38,6 +42,9 @@ pub enum Method {
     Quadric { cost: Cost, placement: Placement },
     /// desal's own: area-normalised quadric error, subset placement.
     Desal,
+    /// `Desal`, simplified again with weights from its own mesh's deformation residual
+    /// (`refit.rs`).
+    DesalRefit,
     /// Multi-pose QEM (Mohr & Gleicher 2003), subset placement, its cost plain
     /// (`multipose`), weighted like stage 3's (`multipose-saliency`, `multipose-paper`),
     /// or per unit area like `desal`'s (`multipose-normalized`, with `Cost::Qslim`).
@@ -84,6 +91,7 @@ impl Method {
         match self {
             Method::Quadric { cost, placement } => format!("{}-{}", cost.name(), placement.name()),
             Method::Desal => "desal".into(),
+            Method::DesalRefit => "desal-refit".into(),
             Method::Multipose { cost: Cost::Qslim, normalized: false } => "multipose".into(),
             Method::Multipose { normalized: true, .. } => "multipose-normalized".into(),
             Method::Multipose { cost, .. } => format!("multipose-{}", cost.name()),
@@ -112,6 +120,9 @@ impl Method {
         }
         if text == "desal" {
             return Ok(Method::Desal);
+        }
+        if text == "desal-refit" {
+            return Ok(Method::DesalRefit);
         }
         if text == "multipose" {
             return Ok(Method::Multipose { cost: Cost::Qslim, normalized: false });
@@ -170,7 +181,7 @@ impl Method {
     pub fn placement(&self) -> &'static str {
         match self {
             Method::Quadric { placement, .. } => placement.name(),
-            Method::Desal | Method::Multipose { .. } => "subset",
+            Method::Desal | Method::DesalRefit | Method::Multipose { .. } => "subset",
             #[cfg(feature = "meshopt")]
             Method::Meshopt(_) => "subset",
             Method::Meshlab(_) => "optimal",
@@ -182,7 +193,7 @@ impl Method {
 
 fn unknown(text: &str) -> String {
     format!(
-        "unknown method '{text}': use {}, {}, multipose-saliency, multipose-paper, a bare qslim/saliency/paper (both placements), all, or external:NAME=PATH",
+        "unknown method '{text}': use {}, {}, desal-refit, multipose-saliency, multipose-paper, multipose-normalized, a bare qslim/saliency/paper (both placements), all, or external:NAME=PATH",
         ALL.join(", "),
         OPTIONAL.join(", ")
     )
@@ -212,6 +223,11 @@ pub struct Inputs {
     /// stage 3 does): the template-quadric methods keep them too, so that each method's
     /// mesh is the one `desal run` would write (`multipose` and other tools take none).
     pub seams: Option<Vec<[u32; 2]>>,
+    /// The eval's deformation model when it is a pose model (`desal-refit` refits it;
+    /// the rig's own skinning is none).
+    pub refit_model: Option<PoseModel>,
+    /// `desal-refit`'s full-resolution residual per vertex, computed once (`refit.rs`).
+    pub full_residual: OnceLock<Vec<f64>>,
 }
 
 /// A method's registered simplified pose set.
@@ -254,16 +270,32 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
             };
             template_quadrics(inputs, &template, &config).with_context(|| format!("{name}: stage 3"))?
         }
-        Method::Desal => {
-            let config = SimplifyConfig {
-                target,
-                placement: Placement::Subset,
-                saliency: false,
-                balance: false,
-                normalized_error: true,
-                ..inputs.base_config.clone()
+        Method::Desal => template_quadrics(inputs, &template, &desal_config(inputs, target))
+            .with_context(|| format!("{name}: stage 3"))?,
+        Method::DesalRefit => {
+            let Some(model) = &inputs.refit_model else {
+                bail!(
+                    "{name} refits the deformation model (scape, scape-cv, scape-centroid or lbs); --model rig has none"
+                );
             };
-            template_quadrics(inputs, &template, &config).with_context(|| format!("{name}: stage 3"))?
+            let config = desal_config(inputs, target);
+            let (first, ..) = template_quadrics(inputs, &template, &config)
+                .with_context(|| format!("{name}: stage 3, first run"))?;
+            let mapped = map::map(&first, &inputs.poses, &inputs.labels)
+                .with_context(|| format!("{name}: stage 4 of the first run"))?;
+            let weights = super::refit::weights(inputs, model, &mapped)
+                .with_context(|| format!("{name}: the first run's residual"))?;
+            let config = SimplifyConfig { saliency: true, ..config };
+            let out = simplify::compute_with_seams(
+                &config,
+                &template,
+                &weights,
+                &inputs.labels,
+                inputs.seams.as_deref(),
+                &NoProgress,
+            )
+            .with_context(|| format!("{name}: stage 3, weighted run"))?;
+            (out.body, Some(out.summary.stop), format!("{} (weighted by the first run's residual)", out.note))
         }
         Method::Multipose { cost, normalized } => {
             let (saliency, balance) = cost.switches();
@@ -274,25 +306,8 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 normalized_error: *normalized,
                 ..inputs.base_config.clone()
             };
-            let poses = &inputs.poses;
-            let seen = &inputs.simplification_poses;
-            // A copy of the pose set only when `[saliency] exclude` hides some poses.
-            let subset;
-            let quadric_poses = if seen.len() == poses.pose_count() {
-                poses
-            } else {
-                subset = PoseSet {
-                    names: seen.iter().map(|&p| poses.names[p].clone()).collect(),
-                    poses: seen.iter().map(|&p| poses.poses[p].clone()).collect(),
-                    faces: poses.faces.clone(),
-                    template: seen
-                        .iter()
-                        .position(|&p| p == poses.template)
-                        .expect("the template is never excluded"),
-                };
-                &subset
-            };
-            let out = simplify::compute_multipose(&config, quadric_poses, &inputs.weights, &inputs.labels)
+            let quadric_poses = seen_poses(&inputs.poses, &inputs.simplification_poses);
+            let out = simplify::compute_multipose(&config, &quadric_poses, &inputs.weights, &inputs.labels)
                 .with_context(|| format!("{name}: multi-pose simplification"))?;
             (out.body, Some(out.summary.stop), out.note)
         }
@@ -368,6 +383,34 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
         check_parts(&name, &mapped)?;
     }
     Ok(SimplifiedSet { raw, mapped, stop, note, simplify_seconds, skin })
+}
+
+/// The poses of `poses` named by `seen` (ascending, the template among them), as a pose
+/// set of their own; `poses` itself when `seen` is every pose (a copy only when
+/// `[saliency] exclude` hides some).
+pub(super) fn seen_poses<'a>(poses: &'a PoseSet, seen: &[usize]) -> Cow<'a, PoseSet> {
+    if seen.len() == poses.pose_count() {
+        return Cow::Borrowed(poses);
+    }
+    Cow::Owned(PoseSet {
+        names: seen.iter().map(|&p| poses.names[p].clone()).collect(),
+        poses: seen.iter().map(|&p| poses.poses[p].clone()).collect(),
+        faces: poses.faces.clone(),
+        template: seen.iter().position(|&p| p == poses.template).expect("the template is never excluded"),
+    })
+}
+
+/// `desal`'s stage-3 settings: the error per unit area, subset placement, no saliency,
+/// no balance.
+fn desal_config(inputs: &Inputs, target: Target) -> SimplifyConfig {
+    SimplifyConfig {
+        target,
+        placement: Placement::Subset,
+        saliency: false,
+        balance: false,
+        normalized_error: true,
+        ..inputs.base_config.clone()
+    }
 }
 
 /// Stage 3 on the template with `config`, the dataset's seams kept: the body, its stop

@@ -27,6 +27,7 @@ pub mod meshlab;
 pub mod meshopt;
 pub mod methods;
 pub mod model;
+pub mod refit;
 pub mod regions;
 pub mod report;
 pub mod rig;
@@ -194,6 +195,7 @@ fn evaluate_dataset(
     };
     let mut inputs = load_inputs(dataset, stages)?;
     inputs.part_fits = model.pose_model().is_some();
+    inputs.refit_model = model.pose_model().cloned();
     let poses = &inputs.poses;
     let target = match args.target_vertices {
         Some(v) => Target::Vertices(v),
@@ -373,7 +375,18 @@ fn load_inputs(dataset: &Dataset, stages: &DatasetStages) -> Result<Inputs> {
         .as_ref()
         .filter(|_| dataset.spec.simplify.keeps_seams())
         .map(|r| desal_rig::seam_edges(&r.rig.mesh, &r.posed.weld));
-    Ok(Inputs { poses, labels, weights, simplification_poses, base_config, rig, part_fits: true, seams })
+    Ok(Inputs {
+        poses,
+        labels,
+        weights,
+        simplification_poses,
+        base_config,
+        rig,
+        part_fits: true,
+        seams,
+        refit_model: None,
+        full_residual: Default::default(),
+    })
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -290,6 +290,11 @@ fn desal_eval_on_a_rig_skins_each_simplified_rig_with_its_own_weights() {
         serde_json::from_slice(&std::fs::read(dir.path().join("out/avatar/eval/eval.json")).unwrap())
             .unwrap();
     assert_eq!(report["model"], "rig");
+    // `desal-refit` refits a pose model; the rig's skinning is none.
+    let refused =
+        desal(&["eval", pipeline.to_str().unwrap(), "--methods", "desal-refit", "--folds", "3", "--quiet"]);
+    assert!(!refused.status.success());
+    assert!(stderr(&refused).contains("desal-refit refits the deformation model"), "{}", stderr(&refused));
     assert!(report["floor"].is_null(), "the rig's skinning at full resolution is the ground truth");
     assert_eq!(report["baseline"], "qslim-optimal", "gltfpack did not run");
     let rows: std::collections::HashMap<String, &serde_json::Value> = report["methods"]
