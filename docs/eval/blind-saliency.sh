@@ -3,7 +3,7 @@
 # poses? `desal eval` computes each method's simplification once, from the saliency (and,
 # for multipose, the shapes) of all 71 poses; only the deformation model is held out. This
 # re-runs the pose-aware methods with the poses of fold 0 excluded
-# (`[dataset.saliency] exclude`, which multipose honours too), so for those 14 poses the
+# (`[dataset.saliency] exclude`, which multipose and desal-refit's residual honour too), so for those 14 poses the
 # whole chain is blind, and compares their held-out change vs qslim-optimal with the same
 # poses in the regular run (docs/eval/reproduce.sh's output).
 #
@@ -31,7 +31,7 @@ open(f"{work}/scape-blind.toml", "w").write(text)
 open(f"{work}/fold0.txt", "w").write("\n".join(fold0))
 PY
 "$repo/target/release/desal" eval "$work/scape-blind.toml" --quiet \
-  --methods qslim-optimal,saliency-optimal,paper-optimal,saliency-subset,paper-subset,multipose > /dev/null
+  --methods qslim-optimal,saliency-optimal,paper-optimal,saliency-subset,paper-subset,multipose,desal-refit > /dev/null
 python3 - "$regular/scape/eval/eval.json" "$work/out/scape/eval/eval.json" "$work/fold0.txt" <<'PY'
 import json, sys
 regular, blind, fold0 = sys.argv[1], sys.argv[2], open(sys.argv[3]).read().split()
@@ -45,7 +45,7 @@ def change(t, name, gt, fig):
 print(f"Held-out change vs qslim-optimal on the {len(fold0)} poses of fold 0 (poses won):\n")
 print("| method | figure | saliency of all poses | saliency blind to fold 0 |")
 print("|---|---|---|---|")
-for name in ["saliency-optimal", "paper-optimal", "saliency-subset", "paper-subset", "multipose"]:
+for name in ["saliency-optimal", "paper-optimal", "saliency-subset", "paper-subset", "multipose", "desal-refit"]:
     for gt in ["vs_full", "vs_simplified"]:
         for fig in ["v2v", "v2f"]:
             print(f"| {name} | {fig} {gt.replace('_', ' ')} GT | {change(a, name, gt, fig)} | {change(b, name, gt, fig)} |")
