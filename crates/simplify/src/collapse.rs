@@ -92,7 +92,8 @@ pub(crate) fn run_engine(
     // is injected into the pool and the caller sleeps until a worker wakes it (SCAPE at
     // 2 threads, paired runs: −2 % wall; −0.04 M instructions; geo_1m's peak RSS −2 MB,
     // the passes' vectors coming from the worker's allocator arena). Phase 1 stays on
-    // the caller's thread: run there, its arrays cost geo_1m 5 MB more.
+    // the caller's thread: on a worker its arrays came from that arena too, and geo_1m's
+    // peak grew by 5 to 16 MB.
     rayon::scope(|_| run_passes(&mut engine, &target, &mut marks, progress));
     progress.finish();
     let stop = if target.reached(&engine) { StopReason::TargetReached } else { StopReason::NoValidCollapse };
