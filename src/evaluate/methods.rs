@@ -7,7 +7,7 @@
 //! | `saliency-optimal`, `saliency-subset` | cost × saliency weight | greedy / subset |
 //! | `paper-optimal`, `paper-subset` | cost × saliency × edge length (the paper, Eq. 5) | greedy / subset |
 //! | `desal` | desal's own (issue 17): the template's quadrics, each collapse ranked by its error per unit area (`normalized_error`, meshoptimizer's normalisation), no saliency, no balance (EVAL.md, "desal") | subset |
-//! | `desal-refit` | `desal`, then again with saliency weights from where `desal`'s mesh deforms worse than the full one under the eval's model, fitted in-sample (`refit.rs`); needs a pose model (not `--model rig`); named explicitly, not in `all` | subset |
+//! | `desal-refit` | `desal`, then again with saliency weights from where `desal`'s mesh deforms worse than the full one under the eval's model, fitted in-sample (`refit.rs`), then edges flipped to follow the full surface in every pose (`flip.rs`); needs a pose model (not `--model rig`); named explicitly, not in `all` | subset |
 //! | `multipose` | Mohr & Gleicher 2003: quadrics summed over all poses, no saliency | subset |
 //! | `multipose-saliency`, `multipose-paper` | the same quadrics, the cost × saliency weight (and × edge length): issue 17's "saliency with multi-pose quadrics", measured worse than `multipose` (EVAL.md); named explicitly, not in `all` | subset |
 //! | `multipose-normalized` | the same quadrics, each collapse ranked by its error per unit area as `desal`'s: measured worse than `desal` in v2v and than `multipose` in v2f (EVAL.md); named explicitly, not in `all` | subset |
@@ -43,7 +43,8 @@ pub enum Method {
     /// desal's own: area-normalised quadric error, subset placement.
     Desal,
     /// `Desal`, simplified again with weights from its own mesh's deformation residual
-    /// (`refit.rs`).
+    /// (`refit.rs`), its edges then flipped to follow the full surface in every pose
+    /// (`flip.rs`).
     DesalRefit,
     /// Multi-pose QEM (Mohr & Gleicher 2003), subset placement, its cost plain
     /// (`multipose`), weighted like stage 3's (`multipose-saliency`, `multipose-paper`),
@@ -295,7 +296,11 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 &NoProgress,
             )
             .with_context(|| format!("{name}: stage 3, weighted run"))?;
-            (out.body, Some(out.summary.stop), format!("{} (weighted by the first run's residual)", out.note))
+            let mut body = out.body;
+            let flips =
+                flip_to_the_poses(inputs, &mut body).with_context(|| format!("{name}: the edge flips"))?;
+            let note = format!("{} (weighted by the first run's residual), {flips} edges flipped", out.note);
+            (body, Some(out.summary.stop), note)
         }
         Method::Multipose { cost, normalized } => {
             let (saliency, balance) = cost.switches();
@@ -398,6 +403,24 @@ pub(super) fn seen_poses<'a>(poses: &'a PoseSet, seen: &[usize]) -> Cow<'a, Pose
         faces: poses.faces.clone(),
         template: seen.iter().position(|&p| p == poses.template).expect("the template is never excluded"),
     })
+}
+
+/// `desal-refit`'s last step (`flip.rs`): `body`'s edges flipped where its faces follow the
+/// full surface better over the poses stage 2 saw; the number of flips.
+fn flip_to_the_poses(inputs: &Inputs, body: &mut desal_io::artifact::SimplifiedV1) -> Result<usize> {
+    let mapped = map::map(body, &inputs.poses, &inputs.labels)?;
+    let to_simp = mapped.map.orig_to_simp(inputs.poses.vertex_count());
+    let protected = inputs
+        .seams
+        .iter()
+        .flatten()
+        .filter_map(|&[a, b]| {
+            Some((*to_simp.get(a as usize)?.as_ref()?, *to_simp.get(b as usize)?.as_ref()?))
+        })
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    let seen = &inputs.simplification_poses;
+    Ok(super::flip::flip_edges(&mut body.faces, &mapped.poses, &inputs.poses, seen, &protected))
 }
 
 /// `desal`'s stage-3 settings: the error per unit area, subset placement, no saliency,

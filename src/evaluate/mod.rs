@@ -19,6 +19,7 @@
 //! the `eval/` folder over (`outputs::KEPT_SUBFOLDER`).
 
 pub mod figures;
+pub mod flip;
 pub mod floor;
 pub mod gltfpack;
 pub mod measure;

@@ -13,7 +13,9 @@
 //! (`r` the coarse residual, `f` the full one, the mean over vertices of the bracket
 //! dividing it). Stage 3 then runs again with these as its saliency weights, the rest of
 //! `desal`'s settings unchanged: a collapse among vertices where the coarse surface
-//! deforms badly costs more, so those regions keep more vertices.
+//! deforms badly costs more, so those regions keep more vertices. Last, its edges are
+//! flipped where the triangles then follow the full surface better in every pose
+//! (`flip.rs`).
 //!
 //! Why the excess and not `r` itself: `r` is mostly the model's own error (4.3e-5 of
 //! 4.9e-5 m² on SCAPE), which piles up at the joints whatever the mesh; weighting by it

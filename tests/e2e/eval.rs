@@ -400,9 +400,10 @@ fn the_models_floor_is_cached_and_a_forged_entry_is_measured_again() {
 }
 
 /// Issue 17: `desal-refit` simplifies like `desal`, then again with weights from where
-/// `desal`'s mesh deforms worse than the full one. So its mesh is another, and the
-/// in-sample full → simplified half of v2f (what the weights aim at, on the poses the
-/// model was fitted on) falls against `desal`'s. (Under the rig's own skinning, which has
+/// `desal`'s mesh deforms worse than the full one, and flips edges to follow the poses.
+/// So its mesh is another, and the in-sample full → simplified half of v2f (what the
+/// weights and flips aim at, on the poses the model was fitted on) falls against
+/// `desal`'s. (Under the rig's own skinning, which has
 /// no model to refit, it is refused: `tests/e2e/rig.rs`.)
 #[test]
 fn desal_refit_moves_vertices_to_where_desal_deforms_worse_than_the_full_mesh() {
@@ -412,6 +413,13 @@ fn desal_refit_moves_vertices_to_where_desal_deforms_worse_than_the_full_mesh() 
     let (desal, refit) = (method(&report, "desal"), method(&report, "desal-refit"));
     assert_eq!(refit["vertices"], SAMPLE_TARGET);
     assert_eq!(refit["placement"], "subset");
+    // Its last step flipped edges to follow the poses (`flip.rs`), and says how many.
+    let note = refit["simplify_note"].as_str().unwrap();
+    let flips: usize = note
+        .rsplit_once(" edges flipped")
+        .and_then(|(head, _)| head.rsplit(' ').next()?.parse().ok())
+        .unwrap_or_else(|| panic!("no flip count in {note}"));
+    assert!(flips > 0, "{note}");
     let eval_dir = dir.path().join("out/sample/eval");
     // A pose of each simplified set (the map applied to it), as saved.
     let pose = desal["poses"][0]["name"].as_str().unwrap();
