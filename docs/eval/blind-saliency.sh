@@ -3,7 +3,7 @@
 # poses? `desal eval` computes each method's simplification once, from the saliency (and,
 # for multipose, the shapes) of all 71 poses; only the deformation model is held out. This
 # re-runs the pose-aware methods with the poses of fold 0 excluded
-# (`[dataset.saliency] exclude`, which multipose and desal-refit's residual honour too), so for those 14 poses the
+# (`[dataset.saliency] exclude`, which multipose and desal-refit's residual and flips honour too), so for those 14 poses the
 # whole chain is blind, and compares their held-out change vs qslim-optimal with the same
 # poses in the regular run (docs/eval/reproduce.sh's output).
 #
