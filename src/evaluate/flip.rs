@@ -13,13 +13,15 @@
 //! another flip of the round has changed; the nearest faces are then found again. A face
 //! pair's gain is reused from the round before while neither face nor the full vertices
 //! nearest them changed, so later rounds cost little (SCAPE: 2.9 → 1.9 s). Rounds
-//! stop when one flips nothing, after at most [`ROUNDS`] (on SCAPE at 2500 vertices:
-//! about 800, 190, 35, 6, then a few flipping back and forth as the nearest faces move).
+//! stop when one flips nothing, after at most [`ROUNDS`] (on `desal`'s SCAPE mesh at 2500
+//! vertices: 795, 183, 35, 6, then 2 a round flipping back and forth as the nearest faces
+//! move).
 //!
 //! Safeguards: an edge shared by other than two faces, whose flipped edge exists already,
-//! or that is an attribute seam is never flipped; nor is one whose flipped faces turn
-//! on the template by more than [`MAX_TURN_DEG`] against the old pair's normal or
-//! against each other (so no face folds over).
+//! or whose two ends are both on a rig's attribute seams is never flipped; nor is one
+//! whose flipped faces are slivers or turn on the template by more than
+//! [`MAX_TURN_DEG`] against the old pair's normal or against each other (so no face
+//! folds over on the template; the poses are not checked).
 
 use std::collections::{HashMap, HashSet};
 
@@ -39,14 +41,15 @@ pub const MAX_TURN_DEG: Real = 60.0;
 
 /// Flips edges of `faces` (indices into `coarse`'s vertices) where the full surface
 /// `truth` is followed better over the poses `poses` (indices shared by `coarse`, the
-/// simplified set mapped to every pose, and `truth`); never an edge in `protected`
-/// (vertex pairs, lower index first). Returns the number of flips.
+/// simplified set mapped to every pose, and `truth`); never an edge between two vertices
+/// marked in `pinned` (one entry per coarse vertex: a rig's seam vertices). Returns the
+/// number of flips, a flip undone by a later round counting twice.
 pub fn flip_edges(
     faces: &mut [Face],
     coarse: &PoseSet,
     truth: &PoseSet,
     poses: &[usize],
-    protected: &HashSet<(u32, u32)>,
+    pinned: &[bool],
 ) -> usize {
     let template = &coarse.poses[coarse.template];
     let max_turn = MAX_TURN_DEG.to_radians().cos();
@@ -72,7 +75,7 @@ pub fn flip_edges(
             .filter_map(|(k, e)| {
                 if e.c == e.d
                     || exists.contains(&undirected(e.c, e.d))
-                    || protected.contains(&undirected(e.a, e.b))
+                    || (pinned[e.a as usize] && pinned[e.b as usize])
                 {
                     return None;
                 }
@@ -192,6 +195,16 @@ fn keeps_orientation(positions: &[Vec3], old: [Face; 2], new: [Face; 2], max_tur
         let [a, b, c] = f.map(|i| positions[i as usize]);
         (b - a).cross(&(c - a))
     };
+    // A face whose doubled area is below 1e-9 of its longest edge squared is a sliver:
+    // its normal means nothing, and the flip is refused.
+    let longest = |f: Face| {
+        let [a, b, c] = f.map(|i| positions[i as usize]);
+        (b - a).norm_squared().max((c - b).norm_squared()).max((a - c).norm_squared())
+    };
+    let sliver = |f: Face| normal(f).norm() <= 1e-9 * longest(f);
+    if new.iter().any(|&f| sliver(f)) {
+        return false;
+    }
     let unit = |n: Vec3| n.try_normalize(0.0);
     let (Some(before), Some(n0), Some(n1)) =
         (unit(normal(old[0]) + normal(old[1])), unit(normal(new[0])), unit(normal(new[1])))
@@ -246,18 +259,44 @@ mod tests {
         (truth, coarse)
     }
 
+    /// The turn and sliver guards: a convex quad may flip; one whose flipped faces would
+    /// fold over (the new diagonal outside the quad), or one where a new face is a
+    /// sliver (its corners in a line), may not.
+    #[test]
+    fn a_flip_that_folds_a_face_or_makes_a_sliver_is_refused() {
+        let e = Edge { a: 0, b: 1, c: 2, d: 3, f0: 0, f1: 1 };
+        let (old, new) = e.pairs();
+        let cos = MAX_TURN_DEG.to_radians().cos();
+        let quad = |c: [Real; 2], d: [Real; 2]| {
+            vec![
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(c[0], c[1], 0.0),
+                Vec3::new(d[0], d[1], 0.0),
+            ]
+        };
+        assert!(keeps_orientation(&quad([1.0, 1.0], [1.0, -1.0]), old, new, cos), "convex");
+        assert!(
+            !keeps_orientation(&quad([-0.5, 1.0], [-0.5, -1.0]), old, new, cos),
+            "the new diagonal outside"
+        );
+        // c, a and d all but in a line: the face [c, a, d] faces +z, but with a doubled
+        // area of 1e-13 against its longest edge squared of 8.
+        assert!(!keeps_orientation(&quad([-1.0, 1.0], [1.0, -1.0 + 1e-13]), old, new, cos), "a sliver");
+    }
+
     fn has_edge(faces: &[Face], a: u32, b: u32) -> bool {
         faces.iter().any(|f| (0..3).any(|i| undirected(f[i], f[(i + 1) % 3]) == undirected(a, b)))
     }
 
     /// The crease along 1–3 is followed after the flip (the full centre then lies on
     /// the coarse surface in both poses); with the centre on the old diagonal's level
-    /// instead, nothing is flipped; a protected edge is kept.
+    /// instead, nothing is flipped; an edge between pinned vertices is kept.
     #[test]
     fn an_edge_flips_to_follow_the_full_surface_in_every_pose() {
         let (truth, coarse) = square([1.0, 1.0, 1.0]);
         let mut faces = coarse.faces.clone();
-        assert_eq!(flip_edges(&mut faces, &coarse, &truth, &[0, 1], &HashSet::new()), 1);
+        assert_eq!(flip_edges(&mut faces, &coarse, &truth, &[0, 1], &[false; 4]), 1);
         assert!(has_edge(&faces, 1, 3) && !has_edge(&faces, 0, 2), "{faces:?}");
         // Orientation kept: both faces face +z on the template.
         for f in &faces {
@@ -268,10 +307,13 @@ mod tests {
         // is the 1–3 diagonal's mean too, so put it at 0): the old split fits it.
         let (truth, coarse) = square([1.0, 1.0, 0.0]);
         let mut faces = coarse.faces.clone();
-        assert_eq!(flip_edges(&mut faces, &coarse, &truth, &[0, 1], &HashSet::new()), 0);
+        assert_eq!(flip_edges(&mut faces, &coarse, &truth, &[0, 1], &[false; 4]), 0);
         assert_eq!(faces, coarse.faces);
         let (truth, coarse) = square([1.0, 1.0, 1.0]);
         let mut faces = coarse.faces.clone();
-        assert_eq!(flip_edges(&mut faces, &coarse, &truth, &[0, 1], &HashSet::from([(0, 2)])), 0);
+        assert_eq!(flip_edges(&mut faces, &coarse, &truth, &[0, 1], &[true, false, true, false]), 0);
+        // Pinned at one end only, the edge flips.
+        let mut faces = coarse.faces.clone();
+        assert_eq!(flip_edges(&mut faces, &coarse, &truth, &[0, 1], &[true, false, false, false]), 1);
     }
 }

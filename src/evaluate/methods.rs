@@ -20,7 +20,6 @@
 //! rule; `subset` placement keeps original vertices, so the map is exact. Every other
 //! stage-3 setting (boundary weight, part borders, safeguards) is the pipeline's.
 
-use std::borrow::Cow;
 use std::path::PathBuf;
 use std::sync::OnceLock;
 use std::time::Instant;
@@ -284,8 +283,15 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 .with_context(|| format!("{name}: stage 3, first run"))?;
             let mapped = map::map(&first, &inputs.poses, &inputs.labels)
                 .with_context(|| format!("{name}: stage 4 of the first run"))?;
-            let weights = super::refit::weights(inputs, model, &mapped)
-                .with_context(|| format!("{name}: the first run's residual"))?;
+            let weights = super::refit::weights(
+                &inputs.poses,
+                &inputs.simplification_poses,
+                &inputs.labels,
+                &inputs.full_residual,
+                model,
+                &mapped,
+            )
+            .with_context(|| format!("{name}: the first run's residual"))?;
             let config = SimplifyConfig { saliency: true, ..config };
             let out = simplify::compute_with_seams(
                 &config,
@@ -299,7 +305,7 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
             let mut body = out.body;
             let flips =
                 flip_to_the_poses(inputs, &mut body).with_context(|| format!("{name}: the edge flips"))?;
-            let note = format!("{} (weighted by the first run's residual), {flips} edges flipped", out.note);
+            let note = format!("{} (weighted by the first run's residual), edge flips: {flips}", out.note);
             (body, Some(out.summary.stop), note)
         }
         Method::Multipose { cost, normalized } => {
@@ -311,7 +317,7 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 normalized_error: *normalized,
                 ..inputs.base_config.clone()
             };
-            let quadric_poses = seen_poses(&inputs.poses, &inputs.simplification_poses);
+            let quadric_poses = inputs.poses.subset(&inputs.simplification_poses);
             let out = simplify::compute_multipose(&config, &quadric_poses, &inputs.weights, &inputs.labels)
                 .with_context(|| format!("{name}: multi-pose simplification"))?;
             (out.body, Some(out.summary.stop), out.note)
@@ -390,37 +396,21 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
     Ok(SimplifiedSet { raw, mapped, stop, note, simplify_seconds, skin })
 }
 
-/// The poses of `poses` named by `seen` (ascending, the template among them), as a pose
-/// set of their own; `poses` itself when `seen` is every pose (a copy only when
-/// `[saliency] exclude` hides some).
-pub(super) fn seen_poses<'a>(poses: &'a PoseSet, seen: &[usize]) -> Cow<'a, PoseSet> {
-    if seen.len() == poses.pose_count() {
-        return Cow::Borrowed(poses);
-    }
-    Cow::Owned(PoseSet {
-        names: seen.iter().map(|&p| poses.names[p].clone()).collect(),
-        poses: seen.iter().map(|&p| poses.poses[p].clone()).collect(),
-        faces: poses.faces.clone(),
-        template: seen.iter().position(|&p| p == poses.template).expect("the template is never excluded"),
-    })
-}
-
 /// `desal-refit`'s last step (`flip.rs`): `body`'s edges flipped where its faces follow the
 /// full surface better over the poses stage 2 saw; the number of flips.
 fn flip_to_the_poses(inputs: &Inputs, body: &mut desal_io::artifact::SimplifiedV1) -> Result<usize> {
     let mapped = map::map(body, &inputs.poses, &inputs.labels)?;
+    // Every vertex on a seam is pinned: stage 3 hands a seam on along its collapses, so
+    // a simplified seam edge need not be an original one.
+    let mut pinned = vec![false; body.positions.len()];
     let to_simp = mapped.map.orig_to_simp(inputs.poses.vertex_count());
-    let protected = inputs
-        .seams
-        .iter()
-        .flatten()
-        .filter_map(|&[a, b]| {
-            Some((*to_simp.get(a as usize)?.as_ref()?, *to_simp.get(b as usize)?.as_ref()?))
-        })
-        .map(|(a, b)| (a.min(b), a.max(b)))
-        .collect();
+    for &v in inputs.seams.iter().flatten().flatten() {
+        if let Some(Some(s)) = to_simp.get(v as usize) {
+            pinned[*s as usize] = true;
+        }
+    }
     let seen = &inputs.simplification_poses;
-    Ok(super::flip::flip_edges(&mut body.faces, &mapped.poses, &inputs.poses, seen, &protected))
+    Ok(super::flip::flip_edges(&mut body.faces, &mapped.poses, &inputs.poses, seen, &pinned))
 }
 
 /// `desal`'s stage-3 settings: the error per unit area, subset placement, no saliency,

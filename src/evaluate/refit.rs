@@ -1,7 +1,7 @@
 //! `desal-refit`'s weights: where the simplified mesh deforms worse than the full one.
 //!
 //! `desal` is simplified once; the eval's deformation model is fitted on it in-sample
-//! on the poses stage 2 saw ([`Inputs::simplification_poses`]) and synthesises each of
+//! on the poses stage 2 saw (`Inputs::simplification_poses`) and synthesises each of
 //! those poses; every full-resolution vertex then gets its mean squared distance to the
 //! synthesised coarse surface (the full → simplified half of v2f, Eq. 6). The same model
 //! fitted at full resolution gives the same distance to its own synthesised surface: the
@@ -24,6 +24,8 @@
 //! the exponent 0.35 and one round: measured on SCAPE (docs/eval/desal-method.md, "desal-refit");
 //! a second round, re-weighted from the first round's mesh, swings back to `desal`.
 
+use std::sync::OnceLock;
+
 use anyhow::{Result, bail};
 use desal_eval::{PoseModel, SurfaceIndex};
 use desal_map::MapOutput;
@@ -31,7 +33,6 @@ use desal_mesh::{PartLabels, PoseSet, TriMesh};
 use rayon::prelude::*;
 
 use super::measure;
-use super::methods::{Inputs, seen_poses};
 
 /// The exponent of the excess (`γ`): SCAPE, against `qslim-optimal`, v2f / v2v
 /// held out: 0.25 −0.8 % / −2.8 %, 0.35 −2.5 % / −1.1 %, 0.5 −3.0 % / +1.1 %,
@@ -42,22 +43,29 @@ pub const EXPONENT: f64 = 0.35;
 pub const FLOOR: f64 = 0.1;
 
 /// The weights of `desal-refit` for `coarse`, `desal`'s simplified set mapped to every
-/// pose (module doc). `model` is the eval's; `full_residual` is `inputs`' cache of the
+/// pose of `poses` (module doc), measured on the poses `seen` (those stage 2 saw; the
+/// full set's part labels `labels`). `model` is the eval's; `full_residual` caches the
 /// full-resolution residual, filled on the first call.
-pub fn weights(inputs: &Inputs, model: &PoseModel, coarse: &MapOutput) -> Result<Vec<f64>> {
-    let seen = &inputs.simplification_poses;
-    let truth = seen_poses(&inputs.poses, seen);
+pub fn weights(
+    poses: &PoseSet,
+    seen: &[usize],
+    labels: &PartLabels,
+    full_residual: &OnceLock<Vec<f64>>,
+    model: &PoseModel,
+    coarse: &MapOutput,
+) -> Result<Vec<f64>> {
+    let truth = poses.subset(seen);
     if truth.pose_count() < 2 {
         bail!("desal-refit needs a pose besides the template to measure its residual on");
     }
-    let full = match inputs.full_residual.get() {
+    let full = match full_residual.get() {
         Some(full) => full,
         None => {
-            let residual = residual(&truth, &truth, &inputs.labels, model)?;
-            inputs.full_residual.get_or_init(|| residual)
+            let residual = residual(&truth, &truth, labels, model)?;
+            full_residual.get_or_init(|| residual)
         }
     };
-    let r = residual(&truth, &seen_poses(&coarse.poses, seen), &coarse.labels, model)?;
+    let r = residual(&truth, &coarse.poses.subset(seen), &coarse.labels, model)?;
     Ok(rule(&r, full, EXPONENT, FLOOR))
 }
 

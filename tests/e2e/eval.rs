@@ -416,8 +416,8 @@ fn desal_refit_moves_vertices_to_where_desal_deforms_worse_than_the_full_mesh() 
     // Its last step flipped edges to follow the poses (`flip.rs`), and says how many.
     let note = refit["simplify_note"].as_str().unwrap();
     let flips: usize = note
-        .rsplit_once(" edges flipped")
-        .and_then(|(head, _)| head.rsplit(' ').next()?.parse().ok())
+        .rsplit_once("edge flips: ")
+        .and_then(|(_, count)| count.parse().ok())
         .unwrap_or_else(|| panic!("no flip count in {note}"));
     assert!(flips > 0, "{note}");
     let eval_dir = dir.path().join("out/sample/eval");

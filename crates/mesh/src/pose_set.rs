@@ -1,6 +1,8 @@
 //! `PoseSet`: N registered poses of one body — one shared triangle list, one position
 //! array per pose, vertex `i` the same body point in every pose.
 
+use std::borrow::Cow;
+
 use crate::error::MeshError;
 use crate::math::Vec3;
 use crate::mesh::{Face, TriMesh};
@@ -74,6 +76,27 @@ impl PoseSet {
     /// The template's positions.
     pub fn template_positions(&self) -> &[Vec3] {
         &self.poses[self.template]
+    }
+
+    /// The poses `kept` (ascending indices, the template among them) as a pose set of
+    /// their own, the template's index moved with it; `self` itself when `kept` is every
+    /// pose (a copy only when some are left out).
+    ///
+    /// # Panics
+    /// When `kept` leaves the template out or names a pose out of range.
+    pub fn subset(&self, kept: &[usize]) -> Cow<'_, PoseSet> {
+        if kept.len() == self.pose_count() {
+            return Cow::Borrowed(self);
+        }
+        Cow::Owned(PoseSet {
+            names: kept.iter().map(|&p| self.names[p].clone()).collect(),
+            poses: kept.iter().map(|&p| self.poses[p].clone()).collect(),
+            faces: self.faces.clone(),
+            template: kept
+                .iter()
+                .position(|&p| p == self.template)
+                .expect("the template is among the kept poses"),
+        })
     }
 
     /// The template as a standalone mesh (copies positions and faces).
