@@ -114,3 +114,30 @@ impl PoseSet {
         self.names.iter().position(|n| n == name)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three poses of one triangle, pose `p` moved by `p` along x, the template third.
+    fn three() -> PoseSet {
+        let pose =
+            |p: f64| vec![Vec3::new(p, 0.0, 0.0), Vec3::new(p + 1.0, 0.0, 0.0), Vec3::new(p, 1.0, 0.0)];
+        let names = ["a", "b", "c"].map(String::from).to_vec();
+        PoseSet::try_new(names, vec![pose(0.0), pose(1.0), pose(2.0)], vec![[0, 1, 2]], 2).unwrap()
+    }
+
+    /// A subset keeps the named poses in order and moves the template's index with
+    /// them; every pose is the set itself, borrowed.
+    #[test]
+    fn a_subset_keeps_its_poses_and_finds_the_template_among_them() {
+        let set = three();
+        let sub = set.subset(&[0, 2]);
+        assert!(matches!(sub, Cow::Owned(_)));
+        assert_eq!(sub.names, ["a", "c"]);
+        assert_eq!(sub.poses, [set.poses[0].clone(), set.poses[2].clone()]);
+        assert_eq!(sub.template, 1);
+        assert_eq!(sub.faces, set.faces);
+        assert!(matches!(set.subset(&[0, 1, 2]), Cow::Borrowed(s) if std::ptr::eq(s, &set)));
+    }
+}
