@@ -39,19 +39,22 @@ const MIN_GAIN: Real = 1e-3;
 /// How far a flipped face may turn on the template (degrees).
 pub const MAX_TURN_DEG: Real = 60.0;
 
-/// Flips edges of `faces` (indices into `coarse`'s vertices) where the full surface
-/// `truth` is followed better over the poses `poses` (indices shared by `coarse`, the
-/// simplified set mapped to every pose, and `truth`); never an edge between two vertices
-/// marked in `pinned` (one entry per coarse vertex: a rig's seam vertices). Returns the
+/// Flips edges of `faces` where the full surface `truth` is followed better over its
+/// poses `poses`. The faces index coarse vertices, coarse vertex `i` being the original
+/// vertex `kept[i]` (subset placement); an edge between two vertices marked in `pinned`
+/// (one entry per coarse vertex: a rig's seam vertices) is never flipped. Returns the
 /// number of flips, a flip undone by a later round counting twice.
 pub fn flip_edges(
     faces: &mut [Face],
-    coarse: &PoseSet,
+    kept: &[u32],
     truth: &PoseSet,
     poses: &[usize],
     pinned: &[bool],
 ) -> usize {
-    let template = &coarse.poses[coarse.template];
+    // The coarse set in every pose: its vertices sit on the original ones.
+    let coarse: Vec<Vec<Vec3>> =
+        truth.poses.iter().map(|pose| kept.iter().map(|&o| pose[o as usize]).collect()).collect();
+    let template = &coarse[truth.template];
     let max_turn = MAX_TURN_DEG.to_radians().cos();
     let mut flips = 0;
     // Each face pair's gain from the round before, reused while neither face nor the
@@ -94,8 +97,8 @@ pub fn flip_edges(
                 for &p in poses {
                     for &v in &vertices {
                         let x = &truth.poses[p][v as usize];
-                        before += pair_distance_sq(x, &coarse.poses[p], old);
-                        after += pair_distance_sq(x, &coarse.poses[p], new);
+                        before += pair_distance_sq(x, &coarse[p], old);
+                        after += pair_distance_sq(x, &coarse[p], new);
                     }
                 }
                 let gain =
@@ -228,10 +231,10 @@ fn pair_distance_sq(x: &Vec3, positions: &[Vec3], pair: [Face; 2]) -> Real {
 mod tests {
     use super::*;
 
-    /// A unit square of four coarse vertices split along 0–2, and a full mesh with its
-    /// centre as a fifth vertex. In the second pose corners 1 and 3 and the centre rise
-    /// by `rise`, so the full surface creases along 1–3; flat on the template.
-    fn square(rise: [Real; 3]) -> (PoseSet, PoseSet) {
+    /// A full mesh of a unit square's four corners and its centre, flat on the template;
+    /// in the second pose corners 1 and 3 and the centre rise by `rise`. The coarse
+    /// faces: the corners, split along 0–2.
+    fn square(rise: [Real; 3]) -> (PoseSet, Vec<Face>) {
         let flat = vec![
             Vec3::new(0.0, 0.0, 0.0),
             Vec3::new(1.0, 0.0, 0.0),
@@ -243,21 +246,17 @@ mod tests {
         for (v, r) in [1, 3, 4].into_iter().zip(rise) {
             bent[v].z = r;
         }
-        let names = vec!["t".to_string(), "p".to_string()];
         let truth = PoseSet {
-            names: names.clone(),
+            names: vec!["t".to_string(), "p".to_string()],
             poses: vec![flat, bent],
             faces: vec![[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]],
             template: 0,
         };
-        let coarse = PoseSet {
-            names,
-            poses: truth.poses.iter().map(|p| p[..4].to_vec()).collect(),
-            faces: vec![[0, 1, 2], [0, 2, 3]],
-            template: 0,
-        };
-        (truth, coarse)
+        (truth, vec![[0, 1, 2], [0, 2, 3]])
     }
+
+    /// The coarse vertices: the square's corners.
+    const CORNERS: [u32; 4] = [0, 1, 2, 3];
 
     /// The turn and sliver guards: a convex quad may flip; one whose flipped faces would
     /// fold over (the new diagonal outside the quad), or one where a new face is a
@@ -290,30 +289,29 @@ mod tests {
     }
 
     /// The crease along 1–3 is followed after the flip (the full centre then lies on
-    /// the coarse surface in both poses); with the centre on the old diagonal's level
-    /// instead, nothing is flipped; an edge between pinned vertices is kept.
+    /// the coarse surface in both poses); with the centre left at the height of the 0–2
+    /// diagonal instead, the old split fits it and nothing is flipped; an edge between
+    /// pinned vertices is kept.
     #[test]
     fn an_edge_flips_to_follow_the_full_surface_in_every_pose() {
         let (truth, coarse) = square([1.0, 1.0, 1.0]);
-        let mut faces = coarse.faces.clone();
-        assert_eq!(flip_edges(&mut faces, &coarse, &truth, &[0, 1], &[false; 4]), 1);
+        let mut faces = coarse.clone();
+        assert_eq!(flip_edges(&mut faces, &CORNERS, &truth, &[0, 1], &[false; 4]), 1);
         assert!(has_edge(&faces, 1, 3) && !has_edge(&faces, 0, 2), "{faces:?}");
         // Orientation kept: both faces face +z on the template.
         for f in &faces {
-            let [a, b, c] = f.map(|i| coarse.poses[0][i as usize]);
+            let [a, b, c] = f.map(|i| truth.poses[0][i as usize]);
             assert!((b - a).cross(&(c - a)).z > 0.0, "{faces:?}");
         }
-        // The centre at the height of the 0–2 diagonal (0.5 between corners at 0 and 1
-        // is the 1–3 diagonal's mean too, so put it at 0): the old split fits it.
         let (truth, coarse) = square([1.0, 1.0, 0.0]);
-        let mut faces = coarse.faces.clone();
-        assert_eq!(flip_edges(&mut faces, &coarse, &truth, &[0, 1], &[false; 4]), 0);
-        assert_eq!(faces, coarse.faces);
+        let mut faces = coarse.clone();
+        assert_eq!(flip_edges(&mut faces, &CORNERS, &truth, &[0, 1], &[false; 4]), 0);
+        assert_eq!(faces, coarse);
         let (truth, coarse) = square([1.0, 1.0, 1.0]);
-        let mut faces = coarse.faces.clone();
-        assert_eq!(flip_edges(&mut faces, &coarse, &truth, &[0, 1], &[true, false, true, false]), 0);
+        let mut faces = coarse.clone();
+        assert_eq!(flip_edges(&mut faces, &CORNERS, &truth, &[0, 1], &[true, false, true, false]), 0);
         // Pinned at one end only, the edge flips.
-        let mut faces = coarse.faces.clone();
-        assert_eq!(flip_edges(&mut faces, &coarse, &truth, &[0, 1], &[true, false, false, false]), 1);
+        let mut faces = coarse.clone();
+        assert_eq!(flip_edges(&mut faces, &CORNERS, &truth, &[0, 1], &[true, false, false, false]), 1);
     }
 }

@@ -399,18 +399,17 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
 /// `desal-refit`'s last step (`flip.rs`): `body`'s edges flipped where its faces follow the
 /// full surface better over the poses stage 2 saw; the number of flips.
 fn flip_to_the_poses(inputs: &Inputs, body: &mut desal_io::artifact::SimplifiedV1) -> Result<usize> {
-    let mapped = map::map(body, &inputs.poses, &inputs.labels)?;
+    let Some(kept) = body.simp_to_orig.iter().copied().collect::<Option<Vec<u32>>>() else {
+        bail!("the edge flips need subset placement (every vertex an original one)");
+    };
     // Every vertex on a seam is pinned: stage 3 hands a seam on along its collapses, so
     // a simplified seam edge need not be an original one.
-    let mut pinned = vec![false; body.positions.len()];
-    let to_simp = mapped.map.orig_to_simp(inputs.poses.vertex_count());
+    let mut on_seam = vec![false; inputs.poses.vertex_count()];
     for &v in inputs.seams.iter().flatten().flatten() {
-        if let Some(Some(s)) = to_simp.get(v as usize) {
-            pinned[*s as usize] = true;
-        }
+        on_seam[v as usize] = true;
     }
-    let seen = &inputs.simplification_poses;
-    Ok(super::flip::flip_edges(&mut body.faces, &mapped.poses, &inputs.poses, seen, &pinned))
+    let pinned: Vec<bool> = kept.iter().map(|&o| on_seam[o as usize]).collect();
+    Ok(super::flip::flip_edges(&mut body.faces, &kept, &inputs.poses, &inputs.simplification_poses, &pinned))
 }
 
 /// `desal`'s stage-3 settings: the error per unit area, subset placement, no saliency,

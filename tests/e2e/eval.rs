@@ -403,8 +403,8 @@ fn the_models_floor_is_cached_and_a_forged_entry_is_measured_again() {
 /// `desal`'s mesh deforms worse than the full one, and flips edges to follow the poses.
 /// So its mesh is another, and the in-sample full → simplified half of v2f (what the
 /// weights and flips aim at, on the poses the model was fitted on) falls against
-/// `desal`'s. (Under the rig's own skinning, which has
-/// no model to refit, it is refused: `tests/e2e/rig.rs`.)
+/// `desal`'s. (Under the rig's own skinning, which has no model to refit, it is
+/// refused: `tests/e2e/rig.rs`.)
 #[test]
 fn desal_refit_moves_vertices_to_where_desal_deforms_worse_than_the_full_mesh() {
     let dir = tempfile::tempdir().unwrap();
