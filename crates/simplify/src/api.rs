@@ -47,7 +47,7 @@ pub fn simplify_multipose(
 ) -> Result<Simplified, SimplifyError> {
     config.validate()?;
     let template = poses.template_mesh();
-    let input = SimplifyInput { mesh: &template, weights, part_labels, seams: None };
+    let input = SimplifyInput { weights, part_labels, ..SimplifyInput::new(&template) };
     check_input(&input)?;
     let positions: Vec<&[Vec3]> = poses.poses.iter().map(|p| p.as_slice()).collect();
     let config = SimplifyConfig { placement: Placement::Subset, ..config.clone() };
@@ -56,7 +56,7 @@ pub fn simplify_multipose(
 
 /// Validates sizes and values the engine relies on; errors name the offending element.
 fn check_input(input: &SimplifyInput<'_>) -> Result<(), SimplifyError> {
-    let SimplifyInput { mesh, weights, part_labels, seams } = *input;
+    let SimplifyInput { mesh, weights, part_labels, seams, keep_penalty } = *input;
     let n = mesh.positions.len();
     if n == 0 || mesh.faces.is_empty() {
         return Err(SimplifyError::EmptyMesh { vertices: n, faces: mesh.faces.len() });
@@ -75,6 +75,14 @@ fn check_input(input: &SimplifyInput<'_>) -> Result<(), SimplifyError> {
         }
         if let Some(vertex) = w.iter().position(|x| !(x.is_finite() && *x >= 0.0)) {
             return Err(SimplifyError::BadWeight { vertex, value: w[vertex] });
+        }
+    }
+    if let Some(k) = keep_penalty {
+        if k.len() != n {
+            return Err(SimplifyError::KeepPenaltyCountMismatch { penalties: k.len(), vertices: n });
+        }
+        if let Some(vertex) = k.iter().position(|x| !(x.is_finite() && *x >= 0.0)) {
+            return Err(SimplifyError::BadKeepPenalty { vertex, value: k[vertex] });
         }
     }
     if let Some(l) = part_labels

@@ -322,6 +322,9 @@ pub(crate) struct Engine {
     /// the larger weight of the two, so salient detail is never diluted by absorbing a
     /// cheap neighbour.
     pub(crate) weights: Option<Vec<f64>>,
+    /// Keep penalty per slot (subset placement; [`SimplifyInput::keep_penalty`]). A slot
+    /// always holds the input vertex it started with, so the input's array serves.
+    pub(crate) keep_penalty: Option<Vec<f64>>,
     pub(crate) lists: FaceLists,
     /// Unnormalised normal of every input face in the template: a collapse may not
     /// turn a face past the threshold from it either, since small steps add up.
@@ -363,7 +366,7 @@ impl Engine {
         faces: Vec<[u32; 3]>,
         config: &SimplifyConfig,
     ) -> Self {
-        let SimplifyInput { mesh, weights, part_labels, seams } = *input;
+        let SimplifyInput { mesh, weights, part_labels, seams, keep_penalty } = *input;
         let n = mesh.positions.len();
         let pose_count = poses.len();
         let center = mesh.bounding_box().map_or(Vec3::zeros(), |(lo, hi)| (lo + hi) * 0.5);
@@ -420,6 +423,7 @@ impl Engine {
             // `+ 0.0` turns a −0 weight into +0: costs are ranked by their bit patterns,
             // where −0 would sort after every positive cost.
             weights: weights.filter(|_| config.saliency).map(|w| w.iter().map(|&x| x + 0.0).collect()),
+            keep_penalty: keep_penalty.filter(|_| config.placement == Placement::Subset).map(<[f64]>::to_vec),
             lists,
             input_normals,
             vertex_normals,

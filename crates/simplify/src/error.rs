@@ -22,6 +22,12 @@ pub enum SimplifyError {
     /// A saliency weight is negative, NaN or infinite.
     #[error("saliency weight of vertex {vertex} is {value}; weights must be finite and >= 0")]
     BadWeight { vertex: usize, value: f64 },
+    /// The keep penalties are not one per vertex.
+    #[error("{penalties} keep penalties given for a mesh of {vertices} vertices (need one per vertex)")]
+    KeepPenaltyCountMismatch { penalties: usize, vertices: usize },
+    /// A keep penalty is negative, NaN or infinite.
+    #[error("keep penalty of vertex {vertex} is {value}; penalties must be finite and >= 0")]
+    BadKeepPenalty { vertex: usize, value: f64 },
     /// The part labels are not one per vertex.
     #[error("{labels} part labels given for a mesh of {vertices} vertices (need one per vertex)")]
     LabelCountMismatch { labels: usize, vertices: usize },

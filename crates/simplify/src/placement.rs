@@ -54,9 +54,7 @@ impl Engine {
     fn cost_factors(&self, a: u32, b: u32, error: f64, pa: &Vec3, pb: &Vec3) -> f64 {
         let mut cost = error;
         if self.params.normalized_error && self.params.metric == Metric::Quadric {
-            let pc = self.pose_count;
-            let (a, b) = (a as usize * pc, b as usize * pc);
-            let area: f64 = (0..pc).map(|p| self.quadrics[a + p].area + self.quadrics[b + p].area).sum();
+            let area = self.merged_area(a, b);
             if area > 0.0 {
                 cost /= area;
             }
@@ -100,17 +98,41 @@ impl Engine {
     }
 
     /// Subset placement: keep whichever endpoint has the smaller merged error (the lower
-    /// index on a tie); a pinned endpoint is always the one kept.
+    /// index on a tie); a pinned endpoint is always the one kept. With keep penalties,
+    /// the endpoint with the smaller merged error per unit area plus its penalty is kept,
+    /// and the collapse is ranked by the better endpoint's error, as without them
+    /// ([`SimplifyInput::keep_penalty`](crate::SimplifyInput::keep_penalty)); a pinned
+    /// endpoint or the seam rule still decides alone, ranked by the kept one's error.
     fn place_on_endpoint(&self, a: u32, b: u32, pinned: Pinned) -> Candidate {
-        let keep = pinned.endpoint(a, b, |k| self.subset_error(a, b, k));
+        let (keep, error) = match &self.keep_penalty {
+            None => {
+                let keep = pinned.endpoint(a, b, |k| self.subset_error(a, b, k));
+                (keep, self.subset_error(a, b, keep))
+            }
+            Some(penalty) => {
+                let (error_a, error_b) = (self.subset_error(a, b, a), self.subset_error(a, b, b));
+                // The penalty is per unit area, as a normalised error is: scaled by
+                // the merged area, it is comparable with the summed error.
+                let area = self.merged_area(a, b);
+                let keep = pinned.endpoint(a, b, |k| {
+                    (if k == a { error_a } else { error_b }) + area * penalty[k as usize]
+                });
+                let forced = pinned.any() || pinned.seam_keeps.is_some();
+                let error =
+                    if forced { if keep == a { error_a } else { error_b } } else { error_a.min(error_b) };
+                (keep, error)
+            }
+        };
         let remove = if keep == a { b } else { a };
-        Candidate {
-            remove,
-            keep,
-            position: self.positions[keep as usize],
-            error: self.subset_error(a, b, keep),
-            cost: 0.0,
-        }
+        Candidate { remove, keep, position: self.positions[keep as usize], error, cost: 0.0 }
+    }
+
+    /// The summed quadric area of `a` and `b` over every pose.
+    #[inline]
+    fn merged_area(&self, a: u32, b: u32) -> f64 {
+        let pc = self.pose_count;
+        let (a, b) = (a as usize * pc, b as usize * pc);
+        (0..pc).map(|p| self.quadrics[a + p].area + self.quadrics[b + p].area).sum()
     }
 
     /// Merged error of `(a, b)` when `keep` stays where it is, summed over poses.

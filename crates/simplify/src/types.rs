@@ -19,12 +19,20 @@ pub struct SimplifyInput<'a> {
     /// Each seam survives as a polyline: a seam vertex collapses only along its seam onto
     /// a seam vertex, and seam ends and junctions are never removed. `None`: no seams.
     pub seams: Option<&'a [[u32; 2]]>,
+    /// One keep penalty per input vertex, in squared mesh units (finite, >= 0), read by
+    /// [`crate::Placement::Subset`] only: an edge collapse keeps the endpoint with the
+    /// smaller `merged error per unit area + penalty`, so that among two endpoints the
+    /// cheaper-to-keep one survives; the collapse is still ranked by the better
+    /// endpoint's error alone, so the penalties choose *which* vertex of a region stays,
+    /// not how many. `desal eval`'s `desal-refit` passes each vertex's squared position
+    /// error under the pose model. `None`: the smaller merged error decides.
+    pub keep_penalty: Option<&'a [f64]>,
 }
 
 impl<'a> SimplifyInput<'a> {
     /// A mesh with no weights and no labels.
     pub fn new(mesh: &'a TriMesh) -> Self {
-        Self { mesh, weights: None, part_labels: None, seams: None }
+        Self { mesh, weights: None, part_labels: None, seams: None, keep_penalty: None }
     }
 
     /// Adds per-vertex saliency weights.
@@ -35,6 +43,11 @@ impl<'a> SimplifyInput<'a> {
     /// Adds per-vertex part labels.
     pub fn with_part_labels(self, labels: &'a [u32]) -> Self {
         Self { part_labels: Some(labels), ..self }
+    }
+
+    /// Adds per-vertex keep penalties (see [`SimplifyInput::keep_penalty`]).
+    pub fn with_keep_penalty(self, penalty: &'a [f64]) -> Self {
+        Self { keep_penalty: Some(penalty), ..self }
     }
 
     /// Adds attribute seams (see [`SimplifyInput::seams`]).

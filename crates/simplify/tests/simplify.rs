@@ -200,8 +200,50 @@ fn bad_inputs_are_refused() {
     weights[4] = -1.0;
     let err = simplify(&SimplifyInput::new(&mesh).with_weights(&weights), &SimplifyConfig::default());
     assert_eq!(err.unwrap_err(), SimplifyError::BadWeight { vertex: 4, value: -1.0 });
+    let penalty = vec![0.0; 8];
+    let err = simplify(&SimplifyInput::new(&mesh).with_keep_penalty(&penalty), &SimplifyConfig::default());
+    assert_eq!(err.unwrap_err(), SimplifyError::KeepPenaltyCountMismatch { penalties: 8, vertices: 9 });
+    let mut penalty = vec![0.0; 9];
+    penalty[2] = f64::NAN;
+    let err = simplify(&SimplifyInput::new(&mesh).with_keep_penalty(&penalty), &SimplifyConfig::default());
+    assert!(matches!(err.unwrap_err(), SimplifyError::BadKeepPenalty { vertex: 2, .. }));
     let err = simplify(&SimplifyInput::new(&mesh), &SimplifyConfig::qslim(Target::Ratio(0.0)));
     assert_eq!(err.unwrap_err(), SimplifyError::BadRatio { ratio: 0.0 });
+}
+
+/// Keep penalties choose which endpoint of a subset collapse stays, and nothing else:
+/// zero penalties (and any penalties under optimal placement) give the unpenalised
+/// output exactly; a large penalty on every vertex the unpenalised run kept replaces
+/// most of them with a neighbour, at the same vertex count.
+#[test]
+fn keep_penalties_choose_which_endpoint_stays() {
+    let mesh = blob(6, 0.05, 2);
+    let subset = SimplifyConfig {
+        placement: Placement::Subset,
+        normalized_error: true,
+        ..SimplifyConfig::qslim(Target::Vertices(60))
+    };
+    let with = |penalty: &[f64], config: &SimplifyConfig| {
+        simplify(&SimplifyInput::new(&mesh).with_keep_penalty(penalty), config).expect("valid input")
+    };
+    let plain = run(&mesh, &subset);
+    let zero = vec![0.0; mesh.positions.len()];
+    assert_eq!(with(&zero, &subset).mesh, plain.mesh, "zero penalties change nothing");
+
+    let kept = plain.subset_indices().expect("subset placement keeps input vertices");
+    let mut penalty = zero.clone();
+    for &v in &kept {
+        penalty[v as usize] = 1e3;
+    }
+    let penalised = with(&penalty, &subset);
+    assert_eq!(penalised.mesh.positions.len(), 60);
+    assert_clean_manifold(&penalised.mesh);
+    let again = penalised.subset_indices().expect("subset");
+    let still = again.iter().filter(|v| kept.contains(v)).count();
+    assert!(still < kept.len() / 2, "{still} of {} penalised vertices still kept", kept.len());
+
+    let optimal = SimplifyConfig { placement: Placement::Optimal, ..subset.clone() };
+    assert_eq!(with(&penalty, &optimal).mesh, run(&mesh, &optimal).mesh, "optimal placement ignores them");
 }
 
 /// A vertex where two cones touch (two fans, like SCAPE's vertex 419) is frozen: it
