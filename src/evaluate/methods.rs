@@ -7,7 +7,7 @@
 //! | `saliency-optimal`, `saliency-subset` | cost × saliency weight | greedy / subset |
 //! | `paper-optimal`, `paper-subset` | cost × saliency × edge length (the paper, Eq. 5) | greedy / subset |
 //! | `desal` | desal's own (issue 17): the template's quadrics, each collapse ranked by its error per unit area (`normalized_error`, meshoptimizer's normalisation), no saliency, no balance (EVAL.md, "desal") | subset |
-//! | `desal-refit` | `desal`, then again with saliency weights from where `desal`'s mesh deforms worse than the full one under the eval's model, fitted in-sample (`refit.rs`), then edges flipped to follow the full surface in every pose (`flip.rs`); needs a pose model (not `--model rig`); named explicitly, not in `all` | subset |
+//! | `desal-refit` | `desal`, then again with saliency weights from where `desal`'s mesh deforms worse than the full one under the eval's model, fitted in-sample (`refit.rs`); in both runs each collapse keeps the endpoint that the full-resolution model places best (keep penalties, `refit.rs`); then edges flipped to follow the full surface in every pose (`flip.rs`); needs a pose model (not `--model rig`); named explicitly, not in `all` | subset |
 //! | `multipose` | Mohr & Gleicher 2003: quadrics summed over all poses, no saliency | subset |
 //! | `multipose-saliency`, `multipose-paper` | the same quadrics, the cost × saliency weight (and × edge length): issue 17's "saliency with multi-pose quadrics", measured worse than `multipose` (EVAL.md); named explicitly, not in `all` | subset |
 //! | `multipose-normalized` | the same quadrics, each collapse ranked by its error per unit area as `desal`'s: measured worse than `desal` in v2v and than `multipose` in v2f (EVAL.md); named explicitly, not in `all` | subset |
@@ -226,8 +226,8 @@ pub struct Inputs {
     /// The eval's deformation model when it is a pose model (`desal-refit` refits it;
     /// the rig's own skinning is none).
     pub refit_model: Option<PoseModel>,
-    /// `desal-refit`'s full-resolution residual per vertex, computed once (`refit.rs`).
-    pub full_residual: OnceLock<Vec<f64>>,
+    /// `desal-refit`'s measures of the full-resolution model, computed once (`refit.rs`).
+    pub full_model: OnceLock<super::refit::FullModel>,
 }
 
 /// A method's registered simplified pose set.
@@ -278,34 +278,38 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                     "{name} refits the deformation model (scape, scape-cv, scape-centroid or lbs); --model rig has none"
                 );
             };
+            let seen = &inputs.simplification_poses;
+            let full =
+                super::refit::full_model(&inputs.full_model, &inputs.poses, seen, &inputs.labels, model)
+                    .with_context(|| format!("{name}: the full-resolution model"))?;
+            let penalty = full.keep_penalty();
+            let run = |config: &SimplifyConfig, weights: &[f64]| {
+                simplify::compute_with_keep_penalty(
+                    config,
+                    &template,
+                    weights,
+                    &inputs.labels,
+                    inputs.seams.as_deref(),
+                    Some(&penalty),
+                    &NoProgress,
+                )
+            };
             let config = desal_config(inputs, target);
-            let (first, ..) = template_quadrics(inputs, &template, &config)
-                .with_context(|| format!("{name}: stage 3, first run"))?;
-            let mapped = map::map(&first, &inputs.poses, &inputs.labels)
+            let first =
+                run(&config, &inputs.weights).with_context(|| format!("{name}: stage 3, first run"))?;
+            let mapped = map::map(&first.body, &inputs.poses, &inputs.labels)
                 .with_context(|| format!("{name}: stage 4 of the first run"))?;
-            let weights = super::refit::weights(
-                &inputs.poses,
-                &inputs.simplification_poses,
-                &inputs.labels,
-                &inputs.full_residual,
-                model,
-                &mapped,
-            )
-            .with_context(|| format!("{name}: the first run's residual"))?;
+            let weights = super::refit::weights(&inputs.poses, seen, full, model, &mapped)
+                .with_context(|| format!("{name}: the first run's residual"))?;
             let config = SimplifyConfig { saliency: true, ..config };
-            let out = simplify::compute_with_seams(
-                &config,
-                &template,
-                &weights,
-                &inputs.labels,
-                inputs.seams.as_deref(),
-                &NoProgress,
-            )
-            .with_context(|| format!("{name}: stage 3, weighted run"))?;
+            let out = run(&config, &weights).with_context(|| format!("{name}: stage 3, weighted run"))?;
             let mut body = out.body;
             let flips =
                 flip_to_the_poses(inputs, &mut body).with_context(|| format!("{name}: the edge flips"))?;
-            let note = format!("{} (weighted by the first run's residual), edge flips: {flips}", out.note);
+            let note = format!(
+                "{} (weighted by the first run's residual; both runs keep the vertices the full model places best), edge flips: {flips}",
+                out.note
+            );
             (body, Some(out.summary.stop), note)
         }
         Method::Multipose { cost, normalized } => {

@@ -386,7 +386,7 @@ fn load_inputs(dataset: &Dataset, stages: &DatasetStages) -> Result<Inputs> {
         part_fits: true,
         seams,
         refit_model: None,
-        full_residual: Default::default(),
+        full_model: Default::default(),
     })
 }
 

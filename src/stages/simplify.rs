@@ -347,9 +347,26 @@ pub fn compute_with_seams(
     seams: Option<&[[u32; 2]]>,
     progress: &dyn desal_mesh::Progress,
 ) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
+    compute_with_keep_penalty(config, template, weights, labels, seams, None, progress)
+}
+
+/// [`compute_with_seams`] with per-vertex keep penalties for subset placement
+/// (`desal eval`'s `desal-refit`; `SimplifyInput::keep_penalty`), or none.
+pub fn compute_with_keep_penalty(
+    config: &SimplifyConfig,
+    template: &TriMesh,
+    weights: &[f64],
+    labels: &PartLabels,
+    seams: Option<&[[u32; 2]]>,
+    keep_penalty: Option<&[f64]>,
+    progress: &dyn desal_mesh::Progress,
+) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
     let mut input = SimplifyInput::new(template);
     if let Some(seams) = seams {
         input = input.with_seams(seams);
+    }
+    if let Some(penalty) = keep_penalty {
+        input = input.with_keep_penalty(penalty);
     }
     if config.saliency {
         input = input.with_weights(weights);
