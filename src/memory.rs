@@ -129,17 +129,31 @@ pub fn saliency(
     crate::stages::saliency::compute(params, fit, set.template_mesh().diagonal())
 }
 
-/// Stages 1–4, in `desal run`'s order ([`crate::stages::run_stages`]). With
-/// `multipose`, stage 3 is multi-pose QEM (`desal eval`'s `multipose`, subset
-/// placement) instead of the template's saliency-weighted quadrics.
+/// Which stage 3 [`simplify_pose_set`] runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage3 {
+    /// The template's quadrics with the configured cost, as `desal run`.
+    Template,
+    /// Multi-pose QEM (`desal eval`'s `multipose`, subset placement), no saliency.
+    Multipose,
+    /// `desal eval`'s `desal-refit` (`evaluate::refit`): `desal`'s settings (which the
+    /// caller sets in `params.simplify`, as for `desal`), the part-anchored SCAPE model
+    /// fitted at full resolution on the poses stage 2 reads, the residual-weighted second
+    /// run, both runs with keep penalties, then the edge flips. It gives the mesh `desal
+    /// eval` gives for the same pose set, labels and target.
+    DesalRefit,
+}
+
+/// Stages 1–4, in `desal run`'s order ([`crate::stages::run_stages`]), with stage 3 as
+/// `stage3` says.
 pub fn simplify_pose_set(
     params: &StageParams,
     set: &PoseSet,
     labels: &PartLabels,
-    multipose: bool,
+    stage3: Stage3,
     progress: &dyn Progress,
 ) -> Result<Simplification> {
-    simplify_with_seams(params, set, labels, multipose, None, progress)
+    simplify_with_seams(params, set, labels, stage3, None, progress)
 }
 
 /// [`simplify_pose_set`] with the template's attribute seams handed to stage 3 (a rig's,
@@ -148,20 +162,36 @@ fn simplify_with_seams(
     params: &StageParams,
     set: &PoseSet,
     labels: &PartLabels,
-    multipose: bool,
+    stage3: Stage3,
     seams: Option<&[[u32; 2]]>,
     progress: &dyn Progress,
 ) -> Result<Simplification> {
     let config = params.simplify.config()?;
     let fit = fit(&params.fit, set, labels, progress)?;
     let saliency = saliency(&params.saliency, set, &fit.body)?;
-    let simplified = if multipose {
-        // `multipose` as `desal eval` runs it: no saliency weights on the cost.
-        let config = desal_simplify::SimplifyConfig { saliency: false, ..config };
-        simplify::compute_multipose(&config, set, &saliency.body.weights, labels)?
-    } else {
-        let template = set.template_mesh();
-        simplify::compute_with_seams(&config, &template, &saliency.body.weights, labels, seams, progress)?
+    let simplified = match stage3 {
+        Stage3::Multipose => {
+            // `multipose` as `desal eval` runs it: no saliency weights on the cost.
+            let config = desal_simplify::SimplifyConfig { saliency: false, ..config };
+            simplify::compute_multipose(&config, set, &saliency.body.weights, labels)?
+        }
+        Stage3::Template => {
+            let template = set.template_mesh();
+            simplify::compute_with_seams(&config, &template, &saliency.body.weights, labels, seams, progress)?
+        }
+        Stage3::DesalRefit => {
+            use crate::evaluate::{measure, refit};
+            // The poses stage 2 reads, as `desal eval` hands them to `desal-refit`.
+            let exclude = &params.saliency.exclude;
+            let seen: Vec<usize> = (0..set.pose_count())
+                .filter(|&p| p == set.template || !exclude.contains(&set.names[p]))
+                .collect();
+            let model = measure::pose_model(measure::DEFAULT_MODEL)?;
+            let full = refit::FullModel::measure(set, &seen, labels, &model)
+                .context("desal-refit: the full-resolution model")?;
+            let refit = refit::Refit { poses: set, labels, seen: &seen, seams, model: &model, full: &full };
+            refit.simplify(&config).context("desal-refit")?
+        }
     };
     let map = map::compute(&simplified.body, set, labels)?;
     Ok(Simplification { fit, saliency, simplified, map })
@@ -186,7 +216,7 @@ pub fn simplify_rig(
     file: &Path,
     rig: &RigParams,
     params: &StageParams,
-    multipose: bool,
+    stage3: Stage3,
     progress: &dyn Progress,
 ) -> Result<RigSimplification> {
     rig.weight_options()?;
@@ -195,13 +225,13 @@ pub fn simplify_rig(
     let set = ingest.body.to_pose_set().with_context(|| format!("{}", file.display()))?;
     let labels = input.compute_labels(&set)?;
     let part_labels = labels.body.to_labels().with_context(|| format!("{}", file.display()))?;
-    let seams = if params.simplify.keeps_seams() && !multipose {
+    let seams = if params.simplify.keeps_seams() && stage3 != Stage3::Multipose {
         Some(crate::stages::seams::rig_seam_edges(&input, set.vertex_count())?)
     } else {
         None
     };
     let seam_edges = seams.as_ref().map(|s| s.edges.as_slice());
-    let stages = simplify_with_seams(params, &set, &part_labels, multipose, seam_edges, progress)?;
+    let stages = simplify_with_seams(params, &set, &part_labels, stage3, seam_edges, progress)?;
     let (glb, summary) =
         crate::stages::rig::simplified_glb(&input.to_owned(), &stages.simplified.body, &stages.map.body)?;
     Ok(RigSimplification { glb, rig: summary, ingest, labels, stages })

@@ -282,35 +282,16 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
             let full =
                 super::refit::full_model(&inputs.full_model, &inputs.poses, seen, &inputs.labels, model)
                     .with_context(|| format!("{name}: the full-resolution model"))?;
-            let penalty = full.keep_penalty();
-            let run = |config: &SimplifyConfig, weights: &[f64]| {
-                simplify::compute_with_keep_penalty(
-                    config,
-                    &template,
-                    weights,
-                    &inputs.labels,
-                    inputs.seams.as_deref(),
-                    Some(&penalty),
-                    &NoProgress,
-                )
+            let refit = super::refit::Refit {
+                poses: &inputs.poses,
+                labels: &inputs.labels,
+                seen,
+                seams: inputs.seams.as_deref(),
+                model,
+                full,
             };
-            let config = desal_config(inputs, target);
-            let first =
-                run(&config, &inputs.weights).with_context(|| format!("{name}: stage 3, first run"))?;
-            let mapped = map::map(&first.body, &inputs.poses, &inputs.labels)
-                .with_context(|| format!("{name}: stage 4 of the first run"))?;
-            let weights = super::refit::weights(&inputs.poses, seen, full, model, &mapped)
-                .with_context(|| format!("{name}: the first run's residual"))?;
-            let config = SimplifyConfig { saliency: true, ..config };
-            let out = run(&config, &weights).with_context(|| format!("{name}: stage 3, weighted run"))?;
-            let mut body = out.body;
-            let flips =
-                flip_to_the_poses(inputs, &mut body).with_context(|| format!("{name}: the edge flips"))?;
-            let note = format!(
-                "{} (weighted by the first run's residual; both runs keep the vertices the full model places best), edge flips: {flips}",
-                out.note
-            );
-            (body, Some(out.summary.stop), note)
+            let out = refit.simplify(&desal_config(inputs, target)).with_context(|| name.clone())?;
+            (out.body, Some(out.summary.stop), out.note)
         }
         Method::Multipose { cost, normalized } => {
             let (saliency, balance) = cost.switches();
@@ -398,22 +379,6 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
         check_parts(&name, &mapped)?;
     }
     Ok(SimplifiedSet { raw, mapped, stop, note, simplify_seconds, skin })
-}
-
-/// `desal-refit`'s last step (`flip.rs`): `body`'s edges flipped where its faces follow the
-/// full surface better over the poses stage 2 saw; the number of flips.
-fn flip_to_the_poses(inputs: &Inputs, body: &mut desal_io::artifact::SimplifiedV1) -> Result<usize> {
-    let Some(kept) = body.simp_to_orig.iter().copied().collect::<Option<Vec<u32>>>() else {
-        bail!("the edge flips need subset placement (every vertex an original one)");
-    };
-    // Every vertex on a seam is pinned: stage 3 hands a seam on along its collapses, so
-    // a simplified seam edge need not be an original one.
-    let mut on_seam = vec![false; inputs.poses.vertex_count()];
-    for &v in inputs.seams.iter().flatten().flatten() {
-        on_seam[v as usize] = true;
-    }
-    let pinned: Vec<bool> = kept.iter().map(|&o| on_seam[o as usize]).collect();
-    Ok(super::flip::flip_edges(&mut body.faces, &kept, &inputs.poses, &inputs.simplification_poses, &pinned))
 }
 
 /// `desal`'s stage-3 settings: the error per unit area, subset placement, no saliency,

@@ -35,13 +35,18 @@
 
 use std::sync::OnceLock;
 
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
 use desal_eval::{PoseModel, SurfaceIndex};
+use desal_io::artifact::SimplifiedV1;
 use desal_map::MapOutput;
-use desal_mesh::{Face, PartLabels, PoseSet, TriMesh, Vec3};
+use desal_mesh::{Face, NoProgress, PartLabels, PoseSet, TriMesh, Vec3};
+use desal_simplify::SimplifyConfig;
 use rayon::prelude::*;
 
 use super::measure;
+use crate::stages::runner::StageOutput;
+use crate::stages::simplify::SimplifySummary;
+use crate::stages::{map, simplify};
 
 /// The exponent of the excess (`γ`). Without keep penalties (SCAPE, against
 /// `qslim-optimal`, v2f / v2v held out): 0.25 −0.8 % / −2.8 %, 0.35 −2.5 % / −1.1 %,
@@ -97,6 +102,71 @@ impl FullModel {
     /// The keep penalty of every vertex: [`KEEP_PENALTY`] times its position error.
     pub fn keep_penalty(&self) -> Vec<f64> {
         self.position_error.iter().map(|e| KEEP_PENALTY * e).collect()
+    }
+}
+
+/// What `desal-refit`'s stage 3 reads: the pose set and its labels, the poses stage 2
+/// saw, the template's attribute seams (kept, and never flipped), the pose model and
+/// its measures at full resolution.
+#[derive(Debug, Clone, Copy)]
+pub struct Refit<'a> {
+    pub poses: &'a PoseSet,
+    pub labels: &'a PartLabels,
+    pub seen: &'a [usize],
+    pub seams: Option<&'a [[u32; 2]]>,
+    pub model: &'a PoseModel,
+    pub full: &'a FullModel,
+}
+
+impl Refit<'_> {
+    /// The whole of `desal-refit`'s stage 3 (module doc): `config` is `desal`'s (subset
+    /// placement, the error per unit area, no saliency, no balance) with the target; the
+    /// first run, its residual, the weighted run, both with the keep penalties, then the
+    /// flips. The second run's output, with the flipped faces and a note that counts them.
+    pub fn simplify(&self, config: &SimplifyConfig) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
+        let template = self.poses.template_mesh();
+        let penalty = self.full.keep_penalty();
+        let run = |config: &SimplifyConfig, weights: &[f64]| {
+            simplify::compute_with_keep_penalty(
+                config,
+                &template,
+                weights,
+                self.labels,
+                self.seams,
+                Some(&penalty),
+                &NoProgress,
+            )
+        };
+        // The first run reads no weights (`desal` has no saliency factor).
+        let unweighted = vec![1.0; self.poses.vertex_count()];
+        let first = run(config, &unweighted).context("stage 3, first run")?;
+        let mapped = map::map(&first.body, self.poses, self.labels).context("stage 4 of the first run")?;
+        let weights = weights(self.poses, self.seen, self.full, self.model, &mapped)
+            .context("the first run's residual")?;
+        let config = SimplifyConfig { saliency: true, ..config.clone() };
+        let mut out = run(&config, &weights).context("stage 3, weighted run")?;
+        let flips = self.flip(&mut out.body).context("the edge flips")?;
+        out.note = format!(
+            "{} (weighted by the first run's residual; both runs keep the vertices the full model places best), edge flips: {flips}",
+            out.note
+        );
+        Ok(out)
+    }
+
+    /// The last step (`flip.rs`): `body`'s edges flipped where its faces follow the full
+    /// surface better over the poses stage 2 saw; the number of flips.
+    fn flip(&self, body: &mut SimplifiedV1) -> Result<usize> {
+        let Some(kept) = body.simp_to_orig.iter().copied().collect::<Option<Vec<u32>>>() else {
+            bail!("the edge flips need subset placement (every vertex an original one)");
+        };
+        // Every vertex on a seam is pinned: stage 3 hands a seam on along its collapses,
+        // so a simplified seam edge need not be an original one.
+        let mut on_seam = vec![false; self.poses.vertex_count()];
+        for &v in self.seams.iter().copied().flatten().flatten() {
+            on_seam[v as usize] = true;
+        }
+        let pinned: Vec<bool> = kept.iter().map(|&o| on_seam[o as usize]).collect();
+        Ok(super::flip::flip_edges(&mut body.faces, &kept, self.poses, self.seen, &pinned))
     }
 }
 

@@ -441,6 +441,48 @@ fn desal_refit_moves_vertices_to_where_desal_deforms_worse_than_the_full_mesh() 
         half(refit),
         half(desal)
     );
+
+    // The library's (and Python's) `desal-refit` on the same arrays is this mesh exactly:
+    // `desal::memory::simplify_pose_set` with `Stage3::DesalRefit`.
+    let mut files: Vec<PathBuf> = std::fs::read_dir(data_samples().join("poses"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "ply"))
+        .collect();
+    files.sort();
+    let names: Vec<String> = files.iter().map(|p| p.file_stem().unwrap().to_string_lossy().into()).collect();
+    let meshes: Vec<_> = files.iter().map(|p| desal_io::read_mesh(p).unwrap()).collect();
+    let positions = meshes
+        .iter()
+        .map(|m| m.positions.iter().map(|x| [x.x as f32, x.y as f32, x.z as f32]).collect())
+        .collect();
+    let template = names.iter().position(|n| n == "00_rest").unwrap();
+    let set = desal::memory::pose_set(Some(names), positions, meshes[template].faces.clone(), template)
+        .unwrap()
+        .set;
+    let labels = desal_io::labels::read_labels(&data_samples().join("labels.json")).unwrap();
+    let mut params = desal::memory::StageParams::default();
+    params.simplify.target_vertices = Some(SAMPLE_TARGET);
+    params.simplify.placement = desal_simplify::Placement::Subset;
+    params.simplify.normalized_error = true;
+    (params.simplify.saliency, params.simplify.balance) = (false, false);
+    let ours = desal::memory::simplify_pose_set(
+        &params,
+        &set,
+        &labels,
+        desal::memory::Stage3::DesalRefit,
+        &desal_mesh::NoProgress,
+    )
+    .unwrap();
+    let (posed, _) = desal::memory::apply_map(&ours.map.body, &set, &labels).unwrap();
+    let saved = simplified("desal-refit");
+    let p = set.names.iter().position(|n| n == pose).unwrap();
+    let ours_f32: Vec<[f32; 3]> =
+        posed.poses[p].iter().map(|x| [x.x as f32, x.y as f32, x.z as f32]).collect();
+    let saved_f32: Vec<[f32; 3]> =
+        saved.positions.iter().map(|x| [x.x as f32, x.y as f32, x.z as f32]).collect();
+    assert_eq!(ours_f32, saved_f32, "the library's desal-refit is the eval's");
+    assert_eq!(posed.faces, saved.faces);
 }
 
 /// Issue 17: `--sweep` runs the `--sweep-methods` at every count, and at the main

@@ -8,7 +8,7 @@ mod convert;
 mod errors;
 mod progress;
 
-use desal::memory::{self, StageParams};
+use desal::memory::{self, Stage3, StageParams};
 use desal::stages::fit::FitParams;
 use desal::stages::hierarchy::HierarchyParams;
 use desal::stages::parts::PartsParams;
@@ -426,25 +426,30 @@ fn stage_params(
     fit: Option<&str>,
     saliency: Option<&str>,
     simplify: Option<&str>,
-) -> PyResult<(StageParams, bool)> {
+) -> PyResult<(StageParams, Stage3)> {
     let mut p = StageParams {
         fit: params("fit", fit)?,
         saliency: params("saliency", saliency)?,
         simplify: params("simplify", simplify)?,
     };
-    let multipose = method == "multipose";
-    if method == "desal" {
+    let stage3 = match method {
+        "multipose" => Stage3::Multipose,
+        "desal-refit" => Stage3::DesalRefit,
+        _ => Stage3::Template,
+    };
+    if method == "desal" || method == "desal-refit" {
         // desal's own method (docs/eval/desal-method.md): the per-area quadric error,
-        // subset placement, no saliency; as `desal eval --methods desal` runs it.
+        // subset placement, no saliency; as `desal eval --methods desal` runs it, and
+        // the settings of both of `desal-refit`'s runs.
         (p.simplify.saliency, p.simplify.balance) = (false, false);
         p.simplify.placement = Placement::Subset;
         p.simplify.normalized_error = true;
-    } else if !multipose {
+    } else if stage3 == Stage3::Template {
         let cost: Cost = method.parse().map_err(|e| {
             bad(
                 "method",
                 format!(
-                    "{e}: use \"paper\", \"qslim\", \"saliency\", \"balance\", \"multipose\" or \"desal\""
+                    "{e}: use \"paper\", \"qslim\", \"saliency\", \"balance\", \"multipose\", \"desal\" or \"desal-refit\""
                 ),
             )
         })?;
@@ -452,7 +457,7 @@ fn stage_params(
     }
     p.simplify.config().map_err(errors::input)?;
     p.saliency.config().map_err(errors::input)?;
-    Ok((p, multipose))
+    Ok((p, stage3))
 }
 
 /// The whole pipeline on one pose set: stages 1–4 as `desal run` computes them.
@@ -468,10 +473,9 @@ fn simplify_pose_set<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let ps = ps.get();
-    let (params, multipose) = stage_params(method, fit, saliency, simplify)?;
+    let (params, stage3) = stage_params(method, fit, saliency, simplify)?;
     let (s, poses, labels) = detached(py, progress, |p| {
-        let s =
-            memory::simplify_pose_set(&params, &ps.set, &ps.labels, multipose, p).map_err(errors::failed)?;
+        let s = memory::simplify_pose_set(&params, &ps.set, &ps.labels, stage3, p).map_err(errors::failed)?;
         let (poses, labels) = memory::apply_map(&s.map.body, &ps.set, &ps.labels).map_err(errors::failed)?;
         Ok((s, poses, labels))
     })?;
@@ -484,7 +488,7 @@ fn simplify_pose_set<'py>(
     out.set_item("weights", convert::vector(py, &s.saliency.body.weights))?;
     out.set_item("simplified_vertices", convert::rows(py, &s.simplified.body.positions))?;
     let report = PyDict::new(py);
-    report.set_item("method", if multipose { "multipose" } else { method })?;
+    report.set_item("method", method)?;
     report.set_item("fit", convert::to_python(py, &s.fit.summary)?)?;
     report.set_item("saliency", convert::to_python(py, &s.saliency.summary)?)?;
     report.set_item(
@@ -526,9 +530,9 @@ fn simplify_rig<'py>(
     rig.frame_config().map_err(errors::input)?;
     rig.parts_config().map_err(errors::input)?;
     rig.weight_options().map_err(errors::input)?;
-    let (params, multipose) = stage_params(method, fit, saliency, simplify)?;
+    let (params, stage3) = stage_params(method, fit, saliency, simplify)?;
     let s = detached(py, progress, |p| {
-        let s = memory::simplify_rig(&file, &rig, &params, multipose, p).map_err(|e| {
+        let s = memory::simplify_rig(&file, &rig, &params, stage3, p).map_err(|e| {
             // A rig desal cannot read or pose is the caller's input, not a failure.
             if e.chain().any(|c| c.is::<desal_rig::RigError>()) {
                 errors::input(e)
@@ -540,7 +544,7 @@ fn simplify_rig<'py>(
         Ok(s)
     })?;
     let report = PyDict::new(py);
-    report.set_item("method", if multipose { "multipose" } else { method })?;
+    report.set_item("method", method)?;
     report.set_item("glb", out)?;
     report.set_item("rig", convert::to_python(py, &s.rig)?)?;
     report.set_item("ingest", convert::to_python(py, &s.ingest.summary)?)?;
@@ -577,11 +581,11 @@ fn hierarchy<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(Bound<'py, PyDict>, Bound<'py, PyAny>)> {
     let ps = ps.get();
-    let (stage, multipose) = stage_params(method, fit, saliency, simplify)?;
-    if multipose {
+    let (stage, stage3) = stage_params(method, fit, saliency, simplify)?;
+    if stage3 != Stage3::Template {
         return Err(bad(
             "method",
-            "a hierarchy's levels are simplified by a cost (paper, qslim, saliency or balance)",
+            "a hierarchy's levels are simplified by a cost (paper, qslim, saliency, balance or desal)",
         ));
     }
     let h: HierarchyParams = params("hierarchy", Some(hierarchy))?;

@@ -83,6 +83,21 @@ def test_the_desal_method_is_its_settings_by_name(pose_set):
     assert not np.array_equal(np.sort(plain.vertex_map), np.sort(ours.vertex_map))
 
 
+def test_the_desal_refit_method_keeps_original_vertices_and_flips_edges(pose_set):
+    # method="desal-refit" (docs/eval/desal-method.md) is `desal eval`'s desal-refit on
+    # these arrays (tests/e2e/eval.rs checks the Rust side against the eval's mesh): the
+    # vertices are original ones, distinct, in the target's number, and the mesh is not
+    # desal's; the report counts the flips.
+    ours = desal.simplify_pose_set(pose_set, target_vertices=1500, method="desal-refit")
+    assert ours.vertex_map.shape == (1500,) and len(np.unique(ours.vertex_map)) == 1500
+    template = pose_set.poses[TEMPLATE]
+    np.testing.assert_array_equal(ours.simplified_vertices, template[ours.vertex_map])
+    plain = desal.simplify_pose_set(pose_set, target_vertices=1500, method="desal")
+    assert not np.array_equal(np.sort(plain.vertex_map), np.sort(ours.vertex_map))
+    assert ours.report["method"] == "desal-refit"
+    assert "edge flips: " in ours.report["simplify"]["note"], ours.report["simplify"]
+
+
 def test_stage_by_stage_is_the_pipeline(pose_set, simplified):
     fit = desal.fit(pose_set)
     assert fit.rotations.shape == (11, 16, 3, 3) and fit.translations.shape == (11, 16, 3)

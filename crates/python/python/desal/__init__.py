@@ -216,9 +216,14 @@ def simplify_pose_set(
     ``poses`` is a :class:`PoseSet`, or (P, V, 3) arrays with ``faces`` (F, 3) and
     ``labels`` (V,) (None: parts discovered from the poses). ``method`` is ``"paper"``
     (saliency and balance), ``"qslim"``, ``"saliency"``, ``"balance"``,
-    ``"multipose"`` (multi-pose QEM, subset placement) or ``"desal"`` (desal's own:
-    the per-area quadric error, subset placement, no saliency; ``placement`` is
-    ignored; docs/eval/desal-method.md). ``saliency_options`` and
+    ``"multipose"`` (multi-pose QEM, subset placement), ``"desal"`` (desal's own
+    stage 3: the per-area quadric error, subset placement, no saliency; ``placement``
+    is ignored; docs/eval/desal-method.md) or ``"desal-refit"`` (desal's whole method,
+    the lowest deformation error on SCAPE: ``"desal"``, then again weighted where its
+    mesh deforms worse than the full one under a SCAPE pose model fitted on these poses,
+    keeping the vertices the model places best, then edges flipped to follow the poses;
+    the mesh ``desal eval`` gives as ``desal-refit``; seconds, not milliseconds).
+    ``saliency_options`` and
     ``simplify_options`` take the keys of a pipeline file's ``[dataset.saliency]`` and
     ``[dataset.simplify]`` tables.
     """
