@@ -182,10 +182,7 @@ fn simplify_with_seams(
         Stage3::DesalRefit => {
             use crate::evaluate::{measure, refit};
             // The poses stage 2 reads, as `desal eval` hands them to `desal-refit`.
-            let exclude = &params.saliency.exclude;
-            let seen: Vec<usize> = (0..set.pose_count())
-                .filter(|&p| p == set.template || !exclude.contains(&set.names[p]))
-                .collect();
+            let seen = params.saliency.seen_poses(set);
             let model = measure::pose_model(measure::DEFAULT_MODEL)?;
             let full = refit::FullModel::measure(set, &seen, labels, &model)
                 .context("desal-refit: the full-resolution model")?;

@@ -366,10 +366,7 @@ fn load_inputs(dataset: &Dataset, stages: &DatasetStages) -> Result<Inputs> {
     let labels = stages.part_labels()?.clone();
     let weights = stages.saliency.body()?.weights.clone();
     let base_config = dataset.spec.simplify.config()?;
-    let excluded = &dataset.spec.saliency.exclude;
-    let simplification_poses = (0..poses.pose_count())
-        .filter(|&p| p == poses.template || !excluded.contains(&poses.names[p]))
-        .collect();
+    let simplification_poses = dataset.spec.saliency.seen_poses(&poses);
     let rig = stages.rig.as_ref().map(|source| rig::RigModel::load(source, &poses)).transpose()?;
     // From the rig just loaded (`stages::seams::rig_seam_edges` would read and pose it again).
     let seams = rig

@@ -138,8 +138,7 @@ impl Refit<'_> {
             )
         };
         // The first run reads no weights (`desal` has no saliency factor).
-        let unweighted = vec![1.0; self.poses.vertex_count()];
-        let first = run(config, &unweighted).context("stage 3, first run")?;
+        let first = run(config, &[]).context("stage 3, first run")?;
         let mapped = map::map(&first.body, self.poses, self.labels).context("stage 4 of the first run")?;
         let weights = weights(self.poses, self.seen, self.full, self.model, &mapped)
             .context("the first run's residual")?;

@@ -33,6 +33,15 @@ impl Default for SaliencyParams {
 }
 
 impl SaliencyParams {
+    /// The poses of `set` stage 2 reads: the template and every pose `exclude` does not
+    /// name (what pose-aware simplifications may look at, `desal eval`'s and the
+    /// library's alike).
+    pub fn seen_poses(&self, set: &desal_mesh::PoseSet) -> Vec<usize> {
+        (0..set.pose_count())
+            .filter(|&p| p == set.template || !self.exclude.contains(&set.names[p]))
+            .collect()
+    }
+
     /// The library configuration these parameters resolve to, validated.
     pub fn config(&self) -> Result<SaliencyConfig> {
         let config = SaliencyConfig {

@@ -114,13 +114,10 @@ impl Engine {
                 // The penalty is per unit area, as a normalised error is: scaled by
                 // the merged area, it is comparable with the summed error.
                 let area = self.merged_area(a, b);
-                let keep = pinned.endpoint(a, b, |k| {
-                    (if k == a { error_a } else { error_b }) + area * penalty[k as usize]
-                });
+                let error_of = |k: u32| if k == a { error_a } else { error_b };
+                let keep = pinned.endpoint(a, b, |k| error_of(k) + area * penalty[k as usize]);
                 let forced = pinned.any() || pinned.seam_keeps.is_some();
-                let error =
-                    if forced { if keep == a { error_a } else { error_b } } else { error_a.min(error_b) };
-                (keep, error)
+                (keep, if forced { error_of(keep) } else { error_a.min(error_b) })
             }
         };
         let remove = if keep == a { b } else { a };
