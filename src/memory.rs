@@ -132,11 +132,12 @@ pub fn saliency(
 /// Which stage 3 [`simplify_pose_set`] runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Stage3 {
-    /// The template's quadrics with the configured cost, as `desal run`.
+    /// Stage 3 as `desal run` runs it: the configured method (`[simplify] method`), else
+    /// the template's quadrics with the configured cost.
     Template,
     /// Multi-pose QEM (`desal eval`'s `multipose`, subset placement), no saliency.
     Multipose,
-    /// `desal eval`'s `desal-refit` (`evaluate::refit`): `desal`'s settings (which the
+    /// `desal eval`'s `desal-refit` (`stages::refit`): `desal`'s settings (which the
     /// caller sets in `params.simplify`, as for `desal`), the part-anchored SCAPE model
     /// fitted at full resolution on the poses stage 2 reads, the residual-weighted second
     /// run, both runs with keep penalties, then the edge flips. It gives the mesh `desal
@@ -175,19 +176,19 @@ fn simplify_with_seams(
             let config = desal_simplify::SimplifyConfig { saliency: false, ..config };
             simplify::compute_multipose(&config, set, &saliency.body.weights, labels)?
         }
-        Stage3::Template => {
-            let template = set.template_mesh();
-            simplify::compute_with_seams(&config, &template, &saliency.body.weights, labels, seams, progress)?
-        }
+        Stage3::Template => crate::stages::stage3::simplify_template(
+            &params.simplify,
+            &params.saliency,
+            set,
+            labels,
+            &saliency.body.weights,
+            seams,
+            progress,
+        )?,
         Stage3::DesalRefit => {
-            use crate::evaluate::{measure, refit};
             // The poses stage 2 reads, as `desal eval` hands them to `desal-refit`.
             let seen = params.saliency.seen_poses(set);
-            let model = measure::pose_model(measure::DEFAULT_MODEL)?;
-            let full = refit::FullModel::measure(set, &seen, labels, &model)
-                .context("desal-refit: the full-resolution model")?;
-            let refit = refit::Refit { poses: set, labels, seen: &seen, seams, model: &model, full: &full };
-            refit.simplify(&config).context("desal-refit")?
+            crate::stages::refit::compute(&config, set, labels, &seen, seams)?
         }
     };
     let map = map::compute(&simplified.body, set, labels)?;

@@ -227,7 +227,7 @@ pub struct Inputs {
     /// the rig's own skinning is none).
     pub refit_model: Option<PoseModel>,
     /// `desal-refit`'s measures of the full-resolution model, computed once (`refit.rs`).
-    pub full_model: OnceLock<super::refit::FullModel>,
+    pub full_model: OnceLock<crate::stages::refit::FullModel>,
 }
 
 /// A method's registered simplified pose set.
@@ -279,10 +279,15 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 );
             };
             let seen = &inputs.simplification_poses;
-            let full =
-                super::refit::full_model(&inputs.full_model, &inputs.poses, seen, &inputs.labels, model)
-                    .with_context(|| format!("{name}: the full-resolution model"))?;
-            let refit = super::refit::Refit {
+            let full = crate::stages::refit::full_model(
+                &inputs.full_model,
+                &inputs.poses,
+                seen,
+                &inputs.labels,
+                model,
+            )
+            .with_context(|| format!("{name}: the full-resolution model"))?;
+            let refit = crate::stages::refit::Refit {
                 poses: &inputs.poses,
                 labels: &inputs.labels,
                 seen,
@@ -381,17 +386,10 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
     Ok(SimplifiedSet { raw, mapped, stop, note, simplify_seconds, skin })
 }
 
-/// `desal`'s stage-3 settings: the error per unit area, subset placement, no saliency,
-/// no balance.
+/// `desal`'s stage-3 settings (`stages::simplify::desal_settings`, which `desal run`'s
+/// `method = "desal"` and `"desal-refit"` use too) with `target`.
 fn desal_config(inputs: &Inputs, target: Target) -> SimplifyConfig {
-    SimplifyConfig {
-        target,
-        placement: Placement::Subset,
-        saliency: false,
-        balance: false,
-        normalized_error: true,
-        ..inputs.base_config.clone()
-    }
+    crate::stages::simplify::desal_settings(SimplifyConfig { target, ..inputs.base_config.clone() })
 }
 
 /// Stage 3 on the template with `config`, the dataset's seams kept: the body, its stop

@@ -19,7 +19,6 @@
 //! the `eval/` folder over (`outputs::KEPT_SUBFOLDER`).
 
 pub mod figures;
-pub mod flip;
 pub mod floor;
 pub mod gltfpack;
 pub mod measure;
@@ -28,7 +27,6 @@ pub mod meshlab;
 pub mod meshopt;
 pub mod methods;
 pub mod model;
-pub mod refit;
 pub mod regions;
 pub mod report;
 pub mod rig;
@@ -49,6 +47,7 @@ use crate::pipeline::{Dataset, Pipeline};
 use crate::progress::ProgressMode;
 use crate::run::{DatasetRun, RunOptions};
 use crate::stages::DatasetStages;
+use crate::stages::simplify::SimplifyParams;
 use figures::{GridRow, Views};
 use measure::{Deformed, MeanStd, Measured, Run};
 use methods::{BASELINE, Inputs, Method, SimplifiedSet};
@@ -365,7 +364,9 @@ fn load_inputs(dataset: &Dataset, stages: &DatasetStages) -> Result<Inputs> {
     let poses = stages.pose_set()?.clone();
     let labels = stages.part_labels()?.clone();
     let weights = stages.saliency.body()?.weights.clone();
-    let base_config = dataset.spec.simplify.config()?;
+    // The settings, not the method: every method sets its own (`desal` and `desal-refit`
+    // are methods of the eval too).
+    let base_config = SimplifyParams { method: None, ..dataset.spec.simplify.clone() }.config()?;
     let simplification_poses = dataset.spec.saliency.seen_poses(&poses);
     let rig = stages.rig.as_ref().map(|source| rig::RigModel::load(source, &poses)).transpose()?;
     // From the rig just loaded (`stages::seams::rig_seam_edges` would read and pose it again).

@@ -161,7 +161,7 @@ impl LevelSettings<'_> {
         labels: ContentHash,
         parent: Option<ContentHash>,
     ) -> Result<StageKey> {
-        let simplify = self.simplify_params(step).key(poses, poses, labels)?;
+        let simplify = super::stage3::key(&self.simplify_params(step), poses, poses, labels, None)?;
         let fit = self.fit.key(poses, labels);
         let saliency = self.saliency.key(poses, poses)?;
         let mut inputs = vec![("poses".to_owned(), poses), ("labels".to_owned(), labels)];
@@ -334,8 +334,17 @@ pub fn compute_level(
     } else {
         Vec::new()
     };
-    let simplified =
-        super::simplify::compute(&config, &fine.template_mesh(), &weights, &fine_labels, progress)?.body;
+    let params = settings.simplify_params(step);
+    let simplified = super::stage3::simplify_template(
+        &params,
+        settings.saliency,
+        &fine,
+        &fine_labels,
+        &weights,
+        None,
+        progress,
+    )?
+    .body;
     let mapped = super::map::map(&simplified, &fine, &fine_labels)?;
     let coarse_to_fine = mapped.map.simp_to_orig;
     let faces = simplified.faces;

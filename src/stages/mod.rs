@@ -11,11 +11,13 @@ pub mod hierarchy;
 pub mod ingest;
 pub mod map;
 pub mod parts;
+pub mod refit;
 pub mod rig;
 pub mod runner;
 pub mod saliency;
 pub mod seams;
 pub mod simplify;
+pub mod stage3;
 
 use std::cell::OnceCell;
 use std::path::Path;
@@ -173,19 +175,20 @@ pub fn run_stages(
         }
         _ => None,
     };
-    let key = inputs.simplify.key_with_seams(
+    let key = stage3::key(
+        inputs.simplify,
         poses.hash,
         salient.hash,
         labels.hash,
         seam_edges.as_ref().map(|s| s.hash),
     )?;
     let simplified = runner.stage(Stage::Simplify, key, &[], || {
-        let config = inputs.simplify.config()?;
-        simplify::compute_with_seams(
-            &config,
-            &set()?.template_mesh(),
-            &salient.body()?.weights,
+        stage3::simplify_template(
+            inputs.simplify,
+            inputs.saliency,
+            set()?,
             part_labels()?,
+            &salient.body()?.weights,
             seam_edges.as_ref().map(|s| s.edges.as_slice()),
             progress,
         )

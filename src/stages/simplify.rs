@@ -58,6 +58,32 @@ pub struct SimplifyParams {
     /// or `ignore` them.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub seams: Option<Seams>,
+    /// One of desal's own methods (EVAL.md, "desal's method"), which set `placement`,
+    /// `saliency`, `balance`, `normalized_error` and `metric` themselves: `desal` (one
+    /// run, the error per unit area, subset placement) or `desal-refit` (`desal`, then
+    /// again weighted by where its mesh deforms worse than the full one under the SCAPE
+    /// pose model, both runs keeping the vertices that model places best, then edge
+    /// flips; `stages/refit.rs`). Absent: one run with the settings above (the paper's
+    /// stage 3).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub method: Option<Method>,
+}
+
+/// `method = "desal" | "desal-refit"` (see [`SimplifyParams::method`]).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    Desal,
+    DesalRefit,
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Desal => "desal",
+            Method::DesalRefit => "desal-refit",
+        }
+    }
 }
 
 /// `seams = "keep" | "ignore"` (see [`SimplifyParams::seams`]).
@@ -87,6 +113,7 @@ impl Default for SimplifyParams {
             boundary_weight: None,
             normalized_error: library.normalized_error,
             seams: None,
+            method: None,
         }
     }
 }
@@ -117,7 +144,7 @@ impl SimplifyParams {
             _ => {}
         }
         let library = SimplifyConfig::default();
-        let config = SimplifyConfig {
+        let mut config = SimplifyConfig {
             target: self.target(),
             placement: self.placement,
             saliency: self.saliency,
@@ -128,8 +155,45 @@ impl SimplifyParams {
             normalized_error: self.normalized_error,
             ..library
         };
+        if let Some(method) = self.method {
+            self.check_method_settings(method)?;
+            config = desal_settings(config);
+        }
         config.validate()?;
         Ok(config)
+    }
+
+    /// A setting `method` makes itself may be left at its default or given the method's
+    /// value; any other value is an error (it would be silently replaced).
+    fn check_method_settings(&self, method: Method) -> Result<()> {
+        let default = SimplifyParams::default();
+        let desal = desal_settings(SimplifyConfig::default());
+        let given = [
+            ("placement", self.placement.name(), default.placement.name(), desal.placement.name()),
+            ("metric", self.metric.name(), default.metric.name(), desal.metric.name()),
+        ];
+        for (key, value, default, wanted) in given {
+            if value != default && value != wanted {
+                bail!(
+                    "simplify: method = \"{}\" sets {key} = \"{wanted}\" itself; remove {key} = \"{value}\"",
+                    method.name()
+                );
+            }
+        }
+        let switches = [
+            ("saliency", self.saliency, default.saliency, desal.saliency),
+            ("balance", self.balance, default.balance, desal.balance),
+            ("normalized_error", self.normalized_error, default.normalized_error, desal.normalized_error),
+        ];
+        for (key, value, default, wanted) in switches {
+            if value != default && value != wanted {
+                bail!(
+                    "simplify: method = \"{}\" sets {key} = {wanted} itself; remove {key} = {value}",
+                    method.name()
+                );
+            }
+        }
+        Ok(())
     }
 
     /// Whether a dataset's seams go to stage 3 (`seams` absent or `keep`).
@@ -155,11 +219,14 @@ impl SimplifyParams {
         seams: Option<ContentHash>,
     ) -> Result<StageKey> {
         let config = self.config()?;
+        let refit = self.method == Some(Method::DesalRefit);
         let mut inputs = vec![("poses".to_owned(), poses)];
-        if config.saliency {
+        // `desal-refit` reads the poses stage 2 saw (recorded in its artifact) and fits
+        // the pose model on the labels.
+        if config.saliency || refit {
             inputs.push(("saliency".into(), saliency));
         }
-        if config.part_borders != PartBorders::Ignore {
+        if config.part_borders != PartBorders::Ignore || refit {
             inputs.push(("labels".into(), labels));
         }
         if let Some(seams) = seams {
@@ -182,6 +249,11 @@ impl SimplifyParams {
         if let Some(mode) = self.seams {
             parameters["seams"] = json!(mode);
         }
+        // Only with a method, so that every key made before it still matches. The
+        // method's own constants are added by `stage3::key`.
+        if let Some(method) = self.method {
+            parameters["method"] = json!(method.name());
+        }
         Ok(StageKey {
             stage: "simplify".into(),
             stage_version: desal_simplify::VERSION,
@@ -198,6 +270,20 @@ fn target_json(target: Target) -> serde_json::Value {
         Target::Vertices(v) => json!({ "vertices": v }),
         Target::Faces(f) => json!({ "faces": f }),
         Target::Ratio(r) => json!({ "ratio": r }),
+    }
+}
+
+/// `config` with the settings desal's own methods make (`desal`, and both runs of
+/// `desal-refit`): the error per unit area, subset placement, the quadric metric, no
+/// saliency, no balance. The target, part borders and guards stay `config`'s.
+pub fn desal_settings(config: SimplifyConfig) -> SimplifyConfig {
+    SimplifyConfig {
+        placement: Placement::Subset,
+        saliency: false,
+        balance: false,
+        metric: Metric::Quadric,
+        normalized_error: true,
+        ..config
     }
 }
 
@@ -553,6 +639,51 @@ mod tests {
         let parsed: SimplifyParams = toml::from_str("seams = \"ignore\"").unwrap();
         assert_eq!(parsed.seams, Some(Seams::Ignore));
         assert!(toml::from_str::<SimplifyParams>("seams = \"weld\"").is_err());
+    }
+
+    /// `method` resolves to desal's settings (whatever the defaults say), refuses a
+    /// setting it would replace, and enters the key: `desal-refit` with the saliency
+    /// artifact (the poses stage 2 saw) and the labels as inputs (its constants:
+    /// `stage3::key`); a key without a method is the key stage 3 always had.
+    #[test]
+    fn a_method_sets_its_own_settings_and_enters_the_key() {
+        let (poses, saliency, labels) =
+            (ContentHash::of(b"poses"), ContentHash::of(b"s"), ContentHash::of(b"l"));
+        let parsed: SimplifyParams =
+            toml::from_str("target_vertices = 100\nmethod = \"desal-refit\"").unwrap();
+        assert_eq!(parsed.method, Some(Method::DesalRefit));
+        let config = parsed.config().unwrap();
+        assert_eq!(
+            config,
+            desal_settings(SimplifyConfig { target: Target::Vertices(100), ..SimplifyConfig::default() })
+        );
+        assert_eq!(
+            (config.placement, config.saliency, config.normalized_error),
+            (Placement::Subset, false, true)
+        );
+        assert!(toml::from_str::<SimplifyParams>("method = \"qslim\"").is_err());
+
+        let plain = SimplifyParams { target_vertices: Some(100), ..SimplifyParams::default() };
+        let desal = SimplifyParams { method: Some(Method::Desal), ..plain.clone() };
+        let keys = [&plain, &desal, &parsed].map(|p| p.key(poses, saliency, labels).unwrap());
+        assert!(!keys[0].parameters.contains("method"));
+        assert!(keys[1].parameters.contains("\"method\":\"desal\""), "{}", keys[1].parameters);
+        assert_ne!(keys[0].hash(), keys[1].hash());
+        assert_ne!(keys[1].hash(), keys[2].hash());
+        let roles = |k: &StageKey| k.inputs.iter().map(|(role, _)| role.clone()).collect::<Vec<_>>();
+        assert_eq!(roles(&keys[1]), ["poses"], "desal reads the template alone");
+        assert_eq!(roles(&keys[2]), ["poses", "saliency", "labels"]);
+        let other_labels = parsed.key(poses, saliency, ContentHash::of(b"other")).unwrap();
+        assert_ne!(other_labels.hash(), keys[2].hash());
+
+        // The method's own value, or the default, may stand beside it; another may not.
+        let same = SimplifyParams { placement: Placement::Subset, normalized_error: true, ..parsed.clone() };
+        assert_eq!(same.config().unwrap(), config);
+        let err = SimplifyParams { balance: true, ..parsed.clone() }.config().unwrap_err().to_string();
+        assert!(err.contains("sets balance = false itself; remove balance = true"), "{err}");
+        let lt = SimplifyParams { metric: Metric::LindstromTurk, ..parsed };
+        let err = lt.config().unwrap_err().to_string();
+        assert!(err.contains("sets metric = \"quadric\" itself"), "{err}");
     }
 
     /// The pipeline's defaults are the library's, field by field.

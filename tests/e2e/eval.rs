@@ -461,19 +461,22 @@ fn desal_refit_moves_vertices_to_where_desal_deforms_worse_than_the_full_mesh() 
         .unwrap()
         .set;
     let labels = desal_io::labels::read_labels(&data_samples().join("labels.json")).unwrap();
-    let mut params = desal::memory::StageParams::default();
-    params.simplify.target_vertices = Some(SAMPLE_TARGET);
-    params.simplify.placement = desal_simplify::Placement::Subset;
-    params.simplify.normalized_error = true;
-    (params.simplify.saliency, params.simplify.balance) = (false, false);
-    let ours = desal::memory::simplify_pose_set(
-        &params,
-        &set,
-        &labels,
-        desal::memory::Stage3::DesalRefit,
-        &desal_mesh::NoProgress,
-    )
-    .unwrap();
+    let library = |target: usize| {
+        let mut params = desal::memory::StageParams::default();
+        params.simplify.target_vertices = Some(target);
+        params.simplify.placement = desal_simplify::Placement::Subset;
+        params.simplify.normalized_error = true;
+        (params.simplify.saliency, params.simplify.balance) = (false, false);
+        desal::memory::simplify_pose_set(
+            &params,
+            &set,
+            &labels,
+            desal::memory::Stage3::DesalRefit,
+            &desal_mesh::NoProgress,
+        )
+        .unwrap()
+    };
+    let ours = library(SAMPLE_TARGET);
     let (posed, _) = desal::memory::apply_map(&ours.map.body, &set, &labels).unwrap();
     let saved = simplified("desal-refit");
     let p = set.names.iter().position(|n| n == pose).unwrap();
@@ -483,6 +486,27 @@ fn desal_refit_moves_vertices_to_where_desal_deforms_worse_than_the_full_mesh() 
         saved.positions.iter().map(|x| [x.x as f32, x.y as f32, x.z as f32]).collect();
     assert_eq!(ours_f32, saved_f32, "the library's desal-refit is the eval's");
     assert_eq!(posed.faces, saved.faces);
+
+    // `desal run` on the bundled `pipelines/sample-desal-refit.toml` (`method =
+    // "desal-refit"`, desal's settings without naming them, 2500 vertices) writes the
+    // library's simplification: the same original vertices, the same faces.
+    let run_dir = dir.path().join("run");
+    let bundled = Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/sample-desal-refit.toml");
+    let out = crate::support::desal(&[
+        "run",
+        bundled.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        run_dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let vertex_map = std::fs::read_to_string(run_dir.join("sample-desal-refit/vertex_map.txt")).unwrap();
+    let ours = library(2500);
+    let ours_map: String = ours.map.body.simp_to_orig.iter().map(|i| format!("{i}\n")).collect();
+    assert_eq!(vertex_map, ours_map, "desal run's desal-refit is the library's");
+    let run_pose =
+        desal_io::read_mesh(&run_dir.join(format!("sample-desal-refit/simplified/{pose}.ply"))).unwrap();
+    assert_eq!(run_pose.faces, ours.map.body.faces);
 }
 
 /// Issue 17: `--sweep` runs the `--sweep-methods` at every count, and at the main

@@ -256,3 +256,54 @@ fn map_refuses_a_simplified_template_of_another_pose_set() {
     assert!(stderr(&out).contains("belongs to another pose set"), "{}", stderr(&out));
     assert!(!output.exists());
 }
+
+/// `[simplify] method = "desal-refit"`: `desal run` simplifies with desal's own method
+/// (subset placement, the flips' note in `simplified.json`), caches it under a key of
+/// its own (a second run computes nothing; naming the method again after a plain run
+/// reruns stage 3 and the map only), and refuses a setting the method would replace.
+#[test]
+fn run_simplifies_with_desal_refit_when_the_pipeline_names_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = write_tube_dataset(dir.path(), "[dataset.simplify]\ntarget_vertices = 60\n");
+    run_ok(&pipeline, &[]);
+    let text = std::fs::read_to_string(&pipeline).unwrap();
+    std::fs::write(
+        &pipeline,
+        text.replace("target_vertices = 60", "target_vertices = 60\nmethod = \"desal-refit\""),
+    )
+    .unwrap();
+    let ran = |report: &serde_json::Value| -> Vec<String> {
+        let stages = report["stages"].as_array().unwrap();
+        stages
+            .iter()
+            .filter(|s| s["cached"] == false)
+            .map(|s| s["name"].as_str().unwrap().to_owned())
+            .collect()
+    };
+    let report = run_ok(&pipeline, &[]);
+    assert_eq!(ran(&report), ["simplify", "map"], "{report}");
+    assert_eq!(report["output"]["vertices"], 60);
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("out/tube/simplified.json")).unwrap()).unwrap();
+    assert_eq!(summary["method"], "desal-refit");
+    assert_eq!(summary["placement"], "subset");
+    let map: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("out/tube/map.json")).unwrap()).unwrap();
+    assert_eq!(map["displacement_max"], 0.0, "every simplified vertex an original one");
+    assert!(ran(&run_ok(&pipeline, &[])).is_empty(), "a second run is served by the cache");
+
+    // A setting the method makes itself, given another value, is refused before any stage.
+    let text = std::fs::read_to_string(&pipeline).unwrap();
+    std::fs::write(
+        &pipeline,
+        text.replace("method = \"desal-refit\"", "method = \"desal-refit\"\nbalance = true"),
+    )
+    .unwrap();
+    let out = crate::support::desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(!out.status.success());
+    let err = crate::support::stderr(&out);
+    assert!(
+        err.contains("method = \"desal-refit\" sets balance = false itself; remove balance = true"),
+        "{err}"
+    );
+}

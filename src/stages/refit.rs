@@ -43,10 +43,13 @@ use desal_mesh::{Face, NoProgress, PartLabels, PoseSet, TriMesh, Vec3};
 use desal_simplify::SimplifyConfig;
 use rayon::prelude::*;
 
-use super::measure;
+use crate::stages::map;
 use crate::stages::runner::StageOutput;
+use crate::stages::simplify;
 use crate::stages::simplify::SimplifySummary;
-use crate::stages::{map, simplify};
+
+pub mod flip;
+pub mod pose_model;
 
 /// The exponent of the excess (`γ`). Without keep penalties (SCAPE, against
 /// `qslim-optimal`, v2f / v2v held out): 0.25 −0.8 % / −2.8 %, 0.35 −2.5 % / −1.1 %,
@@ -85,7 +88,7 @@ impl FullModel {
         if truth.pose_count() < 2 {
             bail!("desal-refit needs a pose besides the template to measure its residual on");
         }
-        let deformed = measure::deform(&truth, labels, &[], model)?.in_sample;
+        let deformed = pose_model::deform(&truth, labels, &[], model)?.in_sample;
         let residual = surface_residual(&truth, &deformed, &truth.faces);
         let measured: Vec<usize> = (0..truth.pose_count()).filter(|&p| p != truth.template).collect();
         let mut position_error = vec![0.0; truth.vertex_count()];
@@ -118,6 +121,45 @@ pub struct Refit<'a> {
     pub full: &'a FullModel,
 }
 
+/// The settings `desal-refit` resolves to beside stage 3's configuration, for the cache
+/// key of a `desal run` stage 3 with `method = "desal-refit"`: a change to any of them
+/// makes another simplification.
+pub fn resolved_json() -> serde_json::Value {
+    serde_json::json!({
+        "version": VERSION,
+        "model": pose_model::DEFAULT_MODEL,
+        "exponent": EXPONENT,
+        "floor": FLOOR,
+        "keep_penalty": KEEP_PENALTY,
+    })
+}
+
+/// The version of `desal-refit`'s procedure beyond its constants (the weight rule, the
+/// residual, the flips); bumped when one changes, so that cached results are remade.
+pub const VERSION: u32 = 1;
+
+/// `desal run`'s stage 3 with `method = "desal-refit"` (and the library's
+/// `Stage3::DesalRefit`): the SCAPE pose model ([`pose_model::DEFAULT_MODEL`], as `desal
+/// eval` runs it by default) fitted at full resolution on the poses `seen` (those stage 2
+/// read), then [`Refit::simplify`] with `config`, `desal`'s settings and the target
+/// (`stages::simplify::desal_settings`). `seams`: the template's attribute seams.
+pub fn compute(
+    config: &SimplifyConfig,
+    poses: &PoseSet,
+    labels: &PartLabels,
+    seen: &[usize],
+    seams: Option<&[[u32; 2]]>,
+) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
+    let started = std::time::Instant::now();
+    let model = pose_model::pose_model(pose_model::DEFAULT_MODEL)?;
+    let full =
+        FullModel::measure(poses, seen, labels, &model).context("desal-refit: the full-resolution model")?;
+    let refit = Refit { poses, labels, seen, seams, model: &model, full: &full };
+    let mut out = refit.simplify(config).context("desal-refit")?;
+    out.summary.seconds = started.elapsed().as_secs_f64();
+    Ok(out)
+}
+
 impl Refit<'_> {
     /// The whole of `desal-refit`'s stage 3 (module doc): `config` is `desal`'s (subset
     /// placement, the error per unit area, no saliency, no balance) with the target; the
@@ -145,6 +187,7 @@ impl Refit<'_> {
         let config = SimplifyConfig { saliency: true, ..config.clone() };
         let mut out = run(&config, &weights).context("stage 3, weighted run")?;
         let flips = self.flip(&mut out.body).context("the edge flips")?;
+        out.summary.method = "desal-refit".into();
         out.note = format!(
             "{} (weighted by the first run's residual; both runs keep the vertices the full model places best), edge flips: {flips}",
             out.note
@@ -165,7 +208,7 @@ impl Refit<'_> {
             on_seam[v as usize] = true;
         }
         let pinned: Vec<bool> = kept.iter().map(|&o| on_seam[o as usize]).collect();
-        Ok(super::flip::flip_edges(&mut body.faces, &kept, self.poses, self.seen, &pinned))
+        Ok(flip::flip_edges(&mut body.faces, &kept, self.poses, self.seen, &pinned))
     }
 }
 
@@ -196,7 +239,7 @@ pub fn weights(
 ) -> Result<Vec<f64>> {
     let truth = poses.subset(seen);
     let set = coarse.poses.subset(seen);
-    let deformed = measure::deform(&set, &coarse.labels, &[], model)?.in_sample;
+    let deformed = pose_model::deform(&set, &coarse.labels, &[], model)?.in_sample;
     let r = surface_residual(&truth, &deformed, &set.faces);
     Ok(rule(&r, &full.residual, EXPONENT, FLOOR))
 }
