@@ -132,17 +132,13 @@ pub fn saliency(
 /// Which stage 3 [`simplify_pose_set`] runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Stage3 {
-    /// Stage 3 as `desal run` runs it: the configured method (`[simplify] method`), else
-    /// the template's quadrics with the configured cost.
+    /// Stage 3 as `desal run` runs it: the configured method (`[simplify] method`:
+    /// `desal`, or `desal-refit`, which gives the mesh `desal eval` gives for the same
+    /// pose set, labels and target), else the template's quadrics with the configured
+    /// cost.
     Template,
     /// Multi-pose QEM (`desal eval`'s `multipose`, subset placement), no saliency.
     Multipose,
-    /// `desal eval`'s `desal-refit` (`stages::refit`): `desal`'s settings (which the
-    /// caller sets in `params.simplify`, as for `desal`), the part-anchored SCAPE model
-    /// fitted at full resolution on the poses stage 2 reads, the residual-weighted second
-    /// run, both runs with keep penalties, then the edge flips. It gives the mesh `desal
-    /// eval` gives for the same pose set, labels and target.
-    DesalRefit,
 }
 
 /// Stages 1–4, in `desal run`'s order ([`crate::stages::run_stages`]), with stage 3 as
@@ -185,11 +181,6 @@ fn simplify_with_seams(
             seams,
             progress,
         )?,
-        Stage3::DesalRefit => {
-            // The poses stage 2 reads, as `desal eval` hands them to `desal-refit`.
-            let seen = params.saliency.seen_poses(set);
-            crate::stages::refit::compute(&config, set, labels, &seen, seams)?
-        }
     };
     let map = map::compute(&simplified.body, set, labels)?;
     Ok(Simplification { fit, saliency, simplified, map })

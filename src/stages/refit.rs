@@ -138,8 +138,8 @@ pub fn resolved_json() -> serde_json::Value {
 /// residual, the flips); bumped when one changes, so that cached results are remade.
 pub const VERSION: u32 = 1;
 
-/// `desal run`'s stage 3 with `method = "desal-refit"` (and the library's
-/// `Stage3::DesalRefit`): the SCAPE pose model ([`pose_model::DEFAULT_MODEL`], as `desal
+/// `desal run`'s stage 3 with `method = "desal-refit"` (and the library's and Python's,
+/// through `stage3::simplify_template`): the SCAPE pose model ([`pose_model::DEFAULT_MODEL`], as `desal
 /// eval` runs it by default) fitted at full resolution on the poses `seen` (those stage 2
 /// read), then [`Refit::simplify`] with `config`, `desal`'s settings and the target
 /// (`stages::simplify::desal_settings`). `seams`: the template's attribute seams.

@@ -443,7 +443,7 @@ fn desal_refit_moves_vertices_to_where_desal_deforms_worse_than_the_full_mesh() 
     );
 
     // The library's (and Python's) `desal-refit` on the same arrays is this mesh exactly:
-    // `desal::memory::simplify_pose_set` with `Stage3::DesalRefit`.
+    // `desal::memory::simplify_pose_set` with `[simplify] method = "desal-refit"`.
     let mut files: Vec<PathBuf> = std::fs::read_dir(data_samples().join("poses"))
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -464,14 +464,12 @@ fn desal_refit_moves_vertices_to_where_desal_deforms_worse_than_the_full_mesh() 
     let library = |target: usize| {
         let mut params = desal::memory::StageParams::default();
         params.simplify.target_vertices = Some(target);
-        params.simplify.placement = desal_simplify::Placement::Subset;
-        params.simplify.normalized_error = true;
-        (params.simplify.saliency, params.simplify.balance) = (false, false);
+        params.simplify.method = Some(desal::stages::simplify::Method::DesalRefit);
         desal::memory::simplify_pose_set(
             &params,
             &set,
             &labels,
-            desal::memory::Stage3::DesalRefit,
+            desal::memory::Stage3::Template,
             &desal_mesh::NoProgress,
         )
         .unwrap()

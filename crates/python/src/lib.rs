@@ -14,10 +14,9 @@ use desal::stages::hierarchy::HierarchyParams;
 use desal::stages::parts::PartsParams;
 use desal::stages::rig::RigParams;
 use desal::stages::saliency::SaliencyParams;
-use desal::stages::simplify::{self as simplify_stage, Cost, SimplifyParams};
+use desal::stages::simplify::{self as simplify_stage, Cost, Method, SimplifyParams};
 use desal_io::artifact::{FitV1, SaliencyV1, SimplifiedV1};
 use desal_mesh::{PartLabels, PoseSet, TriMesh};
-use desal_simplify::Placement;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use serde::de::DeserializeOwned;
@@ -432,18 +431,16 @@ fn stage_params(
         saliency: params("saliency", saliency)?,
         simplify: params("simplify", simplify)?,
     };
-    let stage3 = match method {
-        "multipose" => Stage3::Multipose,
-        "desal-refit" => Stage3::DesalRefit,
-        _ => Stage3::Template,
+    let stage3 = if method == "multipose" { Stage3::Multipose } else { Stage3::Template };
+    // desal's own methods (docs/eval/desal-method.md), as `[simplify] method` names
+    // them: they set the cost's settings themselves.
+    let own = match method {
+        "desal" => Some(Method::Desal),
+        "desal-refit" => Some(Method::DesalRefit),
+        _ => None,
     };
-    if method == "desal" || method == "desal-refit" {
-        // desal's own method (docs/eval/desal-method.md): the per-area quadric error,
-        // subset placement, no saliency; as `desal eval --methods desal` runs it, and
-        // the settings of both of `desal-refit`'s runs.
-        (p.simplify.saliency, p.simplify.balance) = (false, false);
-        p.simplify.placement = Placement::Subset;
-        p.simplify.normalized_error = true;
+    if own.is_some() {
+        p.simplify.method = own;
     } else if stage3 == Stage3::Template {
         let cost: Cost = method.parse().map_err(|e| {
             bad(
@@ -585,7 +582,7 @@ fn hierarchy<'py>(
     if stage3 != Stage3::Template {
         return Err(bad(
             "method",
-            "a hierarchy's levels are simplified by a cost (paper, qslim, saliency, balance or desal)",
+            "a hierarchy's levels are simplified by a cost (paper, qslim, saliency, balance) or by desal or desal-refit",
         ));
     }
     let h: HierarchyParams = params("hierarchy", Some(hierarchy))?;

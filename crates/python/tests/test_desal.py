@@ -96,6 +96,10 @@ def test_the_desal_refit_method_keeps_original_vertices_and_flips_edges(pose_set
     assert not np.array_equal(np.sort(plain.vertex_map), np.sort(ours.vertex_map))
     assert ours.report["method"] == "desal-refit"
     assert "edge flips: " in ours.report["simplify"]["note"], ours.report["simplify"]
+    # A hierarchy level made by desal-refit is this simplification: D selects its vertices.
+    h = desal.hierarchy(pose_set, [1500], method="desal-refit")
+    row, col = h.arrays["D0_row"], h.arrays["D0_col"]
+    np.testing.assert_array_equal(col[np.argsort(row)], ours.vertex_map)
 
 
 def test_stage_by_stage_is_the_pipeline(pose_set, simplified):

@@ -356,7 +356,8 @@ def hierarchy(
     """A multi-level hierarchy for mesh networks (COMA / GraphCMR style).
 
     ``levels`` are the coarse vertex counts, strictly decreasing (e.g. ``[2500, 625]``).
-    Each level is simplified from the one above by ``method``; ``upsampler`` is
+    Each level is simplified from the one above by ``method`` (a cost, or ``"desal"`` or
+    ``"desal-refit"`` as in :func:`simplify_pose_set`; not ``"multipose"``); ``upsampler`` is
     ``"fitted"`` (least squares over the poses) or ``"barycentric"`` (COMA's rule).
     The same as ``[dataset.hierarchy]`` in a pipeline file.
     """
