@@ -24,20 +24,7 @@ scape="$repo/../shared/datasets/scape"
 cargo build --release --quiet --manifest-path "$repo/Cargo.toml" --bin desal
 mkdir -p "$work"
 methods=all,desal-refit
-if [ -x "$peers/cgal_simplify" ]; then
-  # 4996 faces = 2500 vertices on SCAPE's closed genus-0 template, the methods' target.
-  "$peers/cgal_simplify" "$scape/mesh000.ply" "$work/cgal-lt-2500.off" 4996 lt 1 > /dev/null
-  methods="$methods,external:cgal-lt=$work/cgal-lt-2500.off"
-else
-  echo "note: no CGAL driver at $peers; running without the cgal-lt column" >&2
-fi
-python=${DESAL_PYTHON:-python3}
-if "$python" -c "import pymeshlab" 2>/dev/null; then
-  export DESAL_PYTHON="$python"
-  methods="$methods,meshlab,meshlab-saliency"
-else
-  echo "note: $python has no pymeshlab; running without the meshlab columns" >&2
-fi
+. "$repo/docs/eval/peers.sh"
 for k in 0 1 2 3 4; do
   python3 - "$repo" "$scape" "$work" "$k" <<'PY'
 import glob, os, sys

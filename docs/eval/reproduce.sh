@@ -20,21 +20,9 @@ cargo build --release --quiet --manifest-path "$repo/Cargo.toml" --bin desal
 mkdir -p "$out"
 methods=all,desal-refit,multipose-saliency,multipose-paper,multipose-normalized
 sweep_methods=desal,desal-refit,qslim-optimal,paper-subset,multipose
-if [ -x "$peers/cgal_simplify" ]; then
-  # 4996 faces = 2500 vertices on SCAPE's closed genus-0 template, the methods' target.
-  "$peers/cgal_simplify" "$scape/mesh000.ply" "$out/cgal-lt-2500.off" 4996 lt 1 > /dev/null
-  methods="$methods,external:cgal-lt=$out/cgal-lt-2500.off"
-else
-  echo "note: no CGAL driver at $peers; running without the cgal-lt column" >&2
-fi
-python=${DESAL_PYTHON:-python3}
-if "$python" -c "import pymeshlab" 2>/dev/null; then
-  export DESAL_PYTHON="$python"
-  methods="$methods,meshlab,meshlab-saliency"
-  sweep_methods="$sweep_methods,meshlab-saliency"
-else
-  echo "note: $python has no pymeshlab; running without the meshlab columns" >&2
-fi
+work=$out
+. "$repo/docs/eval/peers.sh"
+[ -z "$have_meshlab" ] || sweep_methods="$sweep_methods,meshlab-saliency"
 model=${MODEL:-scape}
 "$repo/target/release/desal" eval "$repo/pipelines/scape.toml" --out "$out" --methods "$methods" --model "$model" \
   --sweep --sweep-methods "$sweep_methods" --quiet
