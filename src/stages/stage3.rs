@@ -28,9 +28,7 @@ pub fn simplify_template(
 ) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
     let config = simplify.config()?;
     match simplify.method {
-        Some(simplify::Method::DesalRefit) => {
-            refit::compute(&config, set, labels, &saliency.seen_poses(set), seams)
-        }
+        Some(Method::DesalRefit) => refit::compute(&config, set, labels, &saliency.seen_poses(set), seams),
         method => {
             let mut out = simplify::compute_with_seams(
                 &config,
