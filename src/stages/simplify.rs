@@ -168,24 +168,31 @@ impl SimplifyParams {
     fn check_method_settings(&self, method: Method) -> Result<()> {
         let default = SimplifyParams::default();
         let desal = desal_settings(SimplifyConfig::default());
-        let given = [
-            ("placement", self.placement.name(), default.placement.name(), desal.placement.name()),
-            ("metric", self.metric.name(), default.metric.name(), desal.metric.name()),
+        // Each setting as a pipeline file spells it: given, default, the method's.
+        let quoted = |name: &str| format!("\"{name}\"");
+        let settings = [
+            (
+                "placement",
+                quoted(self.placement.name()),
+                quoted(default.placement.name()),
+                quoted(desal.placement.name()),
+            ),
+            (
+                "metric",
+                quoted(self.metric.name()),
+                quoted(default.metric.name()),
+                quoted(desal.metric.name()),
+            ),
+            ("saliency", self.saliency.to_string(), default.saliency.to_string(), desal.saliency.to_string()),
+            ("balance", self.balance.to_string(), default.balance.to_string(), desal.balance.to_string()),
+            (
+                "normalized_error",
+                self.normalized_error.to_string(),
+                default.normalized_error.to_string(),
+                desal.normalized_error.to_string(),
+            ),
         ];
-        for (key, value, default, wanted) in given {
-            if value != default && value != wanted {
-                bail!(
-                    "simplify: method = \"{}\" sets {key} = \"{wanted}\" itself; remove {key} = \"{value}\"",
-                    method.name()
-                );
-            }
-        }
-        let switches = [
-            ("saliency", self.saliency, default.saliency, desal.saliency),
-            ("balance", self.balance, default.balance, desal.balance),
-            ("normalized_error", self.normalized_error, default.normalized_error, desal.normalized_error),
-        ];
-        for (key, value, default, wanted) in switches {
+        for (key, value, default, wanted) in settings {
             if value != default && value != wanted {
                 bail!(
                     "simplify: method = \"{}\" sets {key} = {wanted} itself; remove {key} = {value}",

@@ -15,10 +15,6 @@ fn stages(report: &serde_json::Value) -> Vec<(String, bool)> {
         .collect()
 }
 
-fn ran(report: &serde_json::Value) -> Vec<String> {
-    stages(report).into_iter().filter(|(_, cached)| !cached).map(|(name, _)| name).collect()
-}
-
 #[test]
 fn second_identical_run_is_all_hits() {
     let dir = tempfile::tempdir().unwrap();

@@ -13,16 +13,6 @@ fn key_of(report: &serde_json::Value, stage: &str) -> String {
         .to_owned()
 }
 
-fn ran(report: &serde_json::Value) -> Vec<String> {
-    report["stages"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|s| s["cached"] == false)
-        .map(|s| s["name"].as_str().unwrap().to_owned())
-        .collect()
-}
-
 fn entry(dir: &Path, stage: &str, report: &serde_json::Value) -> PathBuf {
     dir.join("out/.cache").join(stage).join(key_of(report, stage))
 }

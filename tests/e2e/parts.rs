@@ -16,16 +16,6 @@ fn auto_tube(dir: &Path, extra_toml: &str) -> PathBuf {
     pipeline
 }
 
-fn ran(report: &serde_json::Value) -> Vec<String> {
-    report["stages"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|s| !s["cached"].as_bool().unwrap())
-        .map(|s| s["name"].as_str().unwrap().to_owned())
-        .collect()
-}
-
 fn read_labels_dsa(path: &Path) -> desal_mesh::PartLabels {
     let (_, body, _) = desal_io::artifact::read_artifact::<desal_io::artifact::LabelsV1>(path).unwrap();
     body.to_labels().unwrap()

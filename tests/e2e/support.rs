@@ -80,3 +80,14 @@ pub fn run_ok(pipeline: &Path, extra: &[&str]) -> serde_json::Value {
     let report = pipeline.parent().unwrap().join("out/tube/report.json");
     serde_json::from_slice(&std::fs::read(report).unwrap()).unwrap()
 }
+
+/// The stages a run computed (not served by the cache), in run order, from its report.
+pub fn ran(report: &serde_json::Value) -> Vec<String> {
+    report["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| !s["cached"].as_bool().unwrap())
+        .map(|s| s["name"].as_str().unwrap().to_owned())
+        .collect()
+}
