@@ -60,16 +60,21 @@ pub fn read_rig(path: &Path, options: &ReadOptions) -> Result<Rig, RigError> {
 /// Reads a rig from `bytes`; `path` names it in errors and locates external buffers.
 pub fn read_rig_from(path: &Path, bytes: &[u8], options: &ReadOptions) -> Result<Rig, RigError> {
     // The one place desal calls into the `gltf` crate: should it panic on a file the
-    // checks let through, the caller gets an error naming the file, not an abort.
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| read_checked(path, bytes, options)))
-        .unwrap_or_else(|panic| {
-            let message = panic
-                .downcast_ref::<&str>()
-                .map(|s| (*s).to_owned())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "no message".into());
-            Err(RigError::Panic { path: path.to_owned(), message })
-        })
+    // checks let through, the caller gets an error naming the file, not an abort (and
+    // Python no `PanicException`).
+    without_panics(path, || read_checked(path, bytes, options))
+}
+
+/// `read()`, with a panic turned into [`RigError::Panic`] naming `path`.
+fn without_panics<T>(path: &Path, read: impl FnOnce() -> Result<T, RigError>) -> Result<T, RigError> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(read)).unwrap_or_else(|panic| {
+        let message = panic
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_owned())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".into());
+        Err(RigError::Panic { path: path.to_owned(), message })
+    })
 }
 
 fn read_checked(path: &Path, bytes: &[u8], options: &ReadOptions) -> Result<Rig, RigError> {
@@ -617,7 +622,17 @@ fn decode_base64(text: &str) -> Option<Vec<u8>> {
 
 #[cfg(test)]
 mod tests {
-    use super::decode_base64;
+    use super::{Path, decode_base64, without_panics};
+
+    #[test]
+    fn d1_a_panic_while_reading_becomes_an_error_naming_the_file() {
+        let result: Result<(), _> = without_panics(Path::new("odd.glb"), || panic!("index out of bounds"));
+        let message = result.unwrap_err().to_string();
+        assert!(
+            message.starts_with("odd.glb: the glTF reader failed on this file (index out of bounds)"),
+            "{message}"
+        );
+    }
 
     #[test]
     fn base64_decodes_padded_and_unpadded_text() {
