@@ -145,8 +145,6 @@ pub struct Accessors<'a> {
 struct Raw {
     data_type: DataType,
     normalized: bool,
-    /// Components per element.
-    width: usize,
     /// `count · width` components, little-endian as stored, zeros where the accessor
     /// has no buffer view.
     components: Vec<u8>,
@@ -180,7 +178,7 @@ impl Accessors<'_> {
             (DataType::U8, false) => values.map(|c| f32::from(c[0])).collect(),
             (DataType::I16, false) => values.map(|c| f32::from(i16::from_le_bytes([c[0], c[1]]))).collect(),
             (DataType::U16, false) => values.map(|c| f32::from(u16::from_le_bytes([c[0], c[1]]))).collect(),
-            (DataType::U32, _) => unreachable!("no float semantic allows UNSIGNED_INT ({})", raw.width),
+            (DataType::U32, _) => unreachable!("the table allows UNSIGNED_INT for integer semantics only"),
         })
     }
 
@@ -198,7 +196,7 @@ impl Accessors<'_> {
             DataType::U8 => values.map(|c| u32::from(c[0])).collect(),
             DataType::U16 => values.map(|c| u32::from(u16::from_le_bytes([c[0], c[1]]))).collect(),
             DataType::U32 => values.map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect(),
-            other => unreachable!("no integer semantic allows {other:?}"),
+            other => unreachable!("the table allows {other:?} for float semantics only"),
         })
     }
 
@@ -312,7 +310,7 @@ impl Accessors<'_> {
                 out[i * element..(i + 1) * element].copy_from_slice(value);
             }
         }
-        Ok(Raw { data_type, normalized, width, components: out })
+        Ok(Raw { data_type, normalized, components: out })
     }
 
     /// The bytes of `count` elements of `element` bytes at `offset` into `view`, with the
