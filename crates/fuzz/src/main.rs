@@ -2,7 +2,7 @@
 //! and exits non-zero on any panic, abort or hang, saving each crashing input.
 //!
 //! ```text
-//! desal-fuzz [--targets all|ply,obj,off,labels-text,labels-json,artifact]
+//! desal-fuzz [--targets all|ply,obj,off,labels-text,labels-json,artifact,gltf-json,gltf-glb,npz]
 //!            [--seconds 60] [--iterations N] [--seed 1] [--out target/fuzz-findings]
 //!            [--memory-mb 2048] [--timeout-secs 10] [--corpus-root <checkout>]
 //! ```

@@ -78,15 +78,17 @@ fn binary_runs_every_target_cleanly() {
 #[test]
 fn binary_catches_panic_abort_hang_and_oom_and_saves_the_input() {
     let out = tempfile::tempdir().unwrap();
-    for (target, kind) in [
-        ("canary-panic", "panic"),
-        ("canary-abort", "abort"),
-        ("canary-hang", "timeout"),
-        ("canary-oom", "abort"),
-        ("canary-memory", "memory"),
+    // The hang canary's watchdog is short; the others get a long one, so that filling
+    // 1.1 GiB on a loaded machine is not mistaken for a hang.
+    for (target, kind, timeout) in [
+        ("canary-panic", "panic", "30"),
+        ("canary-abort", "abort", "30"),
+        ("canary-hang", "timeout", "2"),
+        ("canary-oom", "abort", "30"),
+        ("canary-memory", "memory", "30"),
     ] {
         let (code, stdout) =
-            fuzz(&["--targets", target, "--iterations", "5", "--timeout-secs", "2"], out.path());
+            fuzz(&["--targets", target, "--iterations", "5", "--timeout-secs", timeout], out.path());
         assert_eq!(code, 1, "{target}: {stdout}");
         assert!(stdout.contains(&format!("{kind} at iteration 2")), "{target}: {stdout}");
         assert!(stdout.contains("5 executions"), "{target}: {stdout}");
