@@ -560,8 +560,9 @@ fn flatten_matrix(m: [[f32; 4]; 4]) -> [f32; 16] {
     out
 }
 
-/// The bytes of every buffer: the GLB's binary chunk, a file beside `path`, or a
-/// base64 `data:` URI.
+/// The bytes of every buffer: the GLB's binary chunk, a base64 `data:` URI, or a
+/// regular file inside `path`'s folder (percent-decoded, symlinks resolved; anything
+/// else refused by [`desal_io::confine::read_inside`]).
 fn load_buffers(path: &Path, document: &Document, blob: Option<&[u8]>) -> Result<Vec<Vec<u8>>, RigError> {
     let mut out = Vec::new();
     for buffer in document.buffers() {
@@ -575,15 +576,14 @@ fn load_buffers(path: &Path, document: &Document, blob: Option<&[u8]>) -> Result
                     uri.split_once(";base64,").ok_or_else(|| bad("data URI is not base64".into()))?;
                 decode_base64(encoded).ok_or_else(|| bad("data URI is not valid base64".into()))?
             }
-            gltf::buffer::Source::Uri(uri) => {
-                if uri.contains("://") {
-                    return Err(bad(format!(
-                        "URI '{uri}' is not a file beside the glTF; only relative file paths are read"
-                    )));
-                }
-                let file = path.parent().unwrap_or(Path::new(".")).join(uri);
-                std::fs::read(&file).map_err(|e| bad(format!("cannot read {}: {e}", file.display())))?
-            }
+            // A regular file inside the glTF's own folder, or nothing (desal_io's one rule
+            // for paths found inside data).
+            gltf::buffer::Source::Uri(uri) => desal_io::confine::read_inside(
+                path,
+                &format!("buffer {}", buffer.index()),
+                uri,
+                MAX_BUFFER_BYTES,
+            )?,
         };
         if data.len() < buffer.length() {
             return Err(bad(format!("declares {} bytes but holds {}", buffer.length(), data.len())));

@@ -4,7 +4,7 @@
 //! file and the glTF element. Valid variants (quantised attributes, sparse accessors,
 //! odd `extras`, a deep node chain) must load with exact values.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use serde_json::{Value, json};
 
@@ -173,6 +173,11 @@ impl Fixture {
     fn embedded(&self) -> Vec<u8> {
         let data = base64(&self.bin);
         let uri = format!("data:application/octet-stream;base64,{data}");
+        serde_json::to_vec(&self.with_buffer(json!({"byteLength": self.bin.len(), "uri": uri}))).unwrap()
+    }
+
+    /// The file as a `.gltf` whose buffer is the file `uri` (not written here).
+    fn external(&self, uri: &str) -> Vec<u8> {
         serde_json::to_vec(&self.with_buffer(json!({"byteLength": self.bin.len(), "uri": uri}))).unwrap()
     }
 }
@@ -726,4 +731,82 @@ fn d17_a_fifo_or_device_as_the_rig_file_is_refused_without_hanging() {
     assert!(m.starts_with(&fifo.display().to_string()), "{m}");
     refused(read_rig(Path::new("/dev/zero"), &ReadOptions::default()), &["/dev/zero", "not a regular file"]);
     refused(read_rig(dir.path(), &ReadOptions::default()), &["not a regular file"]);
+}
+
+// D4: buffer URIs only reach regular files inside the glTF's folder.
+
+/// A folder holding `rig.gltf` whose buffer URI is `uri`, and the buffer as `rig.bin`.
+fn external(uri: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let f = Fixture::square();
+    std::fs::write(dir.path().join("rig.bin"), &f.bin).unwrap();
+    let gltf = dir.path().join("rig.gltf");
+    std::fs::write(&gltf, f.external(uri)).unwrap();
+    (dir, gltf)
+}
+
+fn read_file(path: &Path) -> Result<Rig, RigError> {
+    read_rig(path, &ReadOptions::default())
+}
+
+#[test]
+fn d4_a_buffer_beside_the_gltf_loads() {
+    let (_dir, gltf) = external("rig.bin");
+    assert_eq!(read_file(&gltf).unwrap(), read(&Fixture::square().glb()).unwrap());
+}
+
+#[test]
+fn d4_a_percent_encoded_buffer_uri_is_decoded() {
+    let (dir, gltf) = external("my%20rig.bin");
+    std::fs::rename(dir.path().join("rig.bin"), dir.path().join("my rig.bin")).unwrap();
+    assert_eq!(read_file(&gltf).unwrap(), read(&Fixture::square().glb()).unwrap());
+}
+
+#[test]
+fn d4_buffer_uri_outside_folder_is_refused() {
+    let (dir, _) = external("rig.bin");
+    let inner = dir.path().join("inner");
+    std::fs::create_dir(&inner).unwrap();
+    let gltf = inner.join("rig.gltf");
+    std::fs::write(&gltf, Fixture::square().external("../rig.bin")).unwrap();
+    let m = refused(read_file(&gltf), &["buffer 0", "'../rig.bin'", "outside"]);
+    assert!(m.starts_with(&gltf.display().to_string()), "{m}");
+}
+
+#[test]
+fn d4_an_absolute_buffer_uri_is_refused_even_to_a_valid_buffer() {
+    let (dir, _) = external("rig.bin");
+    let absolute = dir.path().join("rig.bin").display().to_string();
+    let (_other, gltf) = external(&absolute);
+    let m = refused(read_file(&gltf), &["buffer 0", &absolute, "absolute"]);
+    assert!(m.starts_with(&gltf.display().to_string()), "{m}");
+    let (_other, gltf) = external("/etc/passwd");
+    refused(read_file(&gltf), &["buffer 0", "'/etc/passwd'", "absolute"]);
+    let (_other, gltf) = external("file:///etc/passwd");
+    refused(read_file(&gltf), &["buffer 0", "URL"]);
+}
+
+#[cfg(unix)]
+#[test]
+fn d4_a_symlink_out_of_the_folder_is_refused() {
+    let outside = tempfile::tempdir().unwrap();
+    std::fs::write(outside.path().join("secret.bin"), Fixture::square().bin).unwrap();
+    let (dir, gltf) = external("link.bin");
+    std::os::unix::fs::symlink(outside.path().join("secret.bin"), dir.path().join("link.bin")).unwrap();
+    let m = refused(read_file(&gltf), &["buffer 0", "'link.bin'", "outside"]);
+    assert!(m.starts_with(&gltf.display().to_string()), "{m}");
+}
+
+#[cfg(unix)]
+#[test]
+fn d4_dev_zero_and_a_fifo_as_buffers_are_refused_without_reading() {
+    let (_dir, gltf) = external("/dev/zero");
+    refused(read_file(&gltf), &["buffer 0", "'/dev/zero'"]);
+    let (dir, gltf) = external("zero.bin");
+    std::os::unix::fs::symlink("/dev/zero", dir.path().join("zero.bin")).unwrap();
+    refused(read_file(&gltf), &["buffer 0", "'zero.bin'"]);
+    let (dir, gltf) = external("pipe.bin");
+    mkfifo(&dir.path().join("pipe.bin"));
+    let m = refused(read_file(&gltf), &["buffer 0", "'pipe.bin'", "not a regular file"]);
+    assert!(m.starts_with(&gltf.display().to_string()), "{m}");
 }
