@@ -206,7 +206,13 @@ fn parts_json(parts: &Bound<'_, PyAny>) -> PyResult<String> {
     let kwargs = PyDict::new(parts.py());
     kwargs.set_item("allow_nan", false)?;
     let text = parts.py().import("json")?.call_method("dumps", (parts,), Some(&kwargs));
-    text.and_then(|t| t.extract()).map_err(|e| bad("parts", e))
+    text.and_then(|t| t.extract()).map_err(|e| {
+        let e = e.value(parts.py()).to_string();
+        InputError::new_err(format!(
+            "parts={} must hold only finite numbers, strings, bools and lists ({e})",
+            args::repr(parts)
+        ))
+    })
 }
 
 /// A digest of a pose set's content: names, template, positions, faces and labels. Two

@@ -212,6 +212,8 @@ D14_CASES = {
     "names str": (lambda ps, p, f: desal.PoseSet(p, f, names="abc"), r"names: must be a list of str"),
     "parts key": (lambda ps, p, f: desal.PoseSet(p, f, parts='{"count": "x"}'), r"count='x' must be"),
     "parts dict": (lambda ps, p, f: desal.PoseSet(p, f, parts={"count": -2}), r"count=-2 must be"),
+    "parts nan": (lambda ps, p, f: desal.PoseSet(p, f, parts={"rigid_tolerance": np.nan}), r"parts=.*nan.* must hold"),
+    "graphcmr not a hierarchy": (lambda ps, p, f: desal.save_graphcmr(5, "unused.npz"), r"h: must be a desal.Hierarchy"),
     "not a pose set": (lambda ps, p, f: desal.fit(5), r"ps: must be a desal.PoseSet, not int"),
     "progress": (lambda ps, p, f: desal.fit(ps, progress=5), r"progress=5 must be callable"),
     "run flag": (lambda ps, p, f: desal.run(ROOT / "pipelines" / "sample.toml", force="yes"), r"force='yes'"),

@@ -458,6 +458,9 @@ def save_graphcmr(h: Hierarchy, path: PathArg) -> None:
     """
     import scipy.sparse  # noqa: F401 - required: the file holds scipy matrices
 
+    if not isinstance(h, Hierarchy):
+        raise InputError(f"h: must be a desal.Hierarchy, not {type(h).__name__}")
+
     def objects(items: list) -> np.ndarray:
         out = np.empty(len(items), dtype=object)
         for k, item in enumerate(items):
