@@ -32,7 +32,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use desal_io::artifact::{self, ArtifactBody, ContentHash, InputRef, Producer};
 use serde::{Deserialize, Serialize};
 
@@ -241,12 +241,12 @@ impl Cache {
     pub fn lookup<T: ArtifactBody>(&self, key: &StageKey) -> Option<Hit> {
         let dir = self.entry_dir(key);
         let path = dir.join("artifact.dsa");
-        let bytes = fs::read(&path).ok()?;
+        let bytes = desal_io::file::read_regular_file(&path).ok()?;
         match artifact::check_artifact::<T>(&path, &bytes).map_err(|e| e.to_string()).and_then(|header| {
             self.check_identity(key, &dir, &bytes)?;
             Ok(header)
         }) {
-            Ok(header) => match fs::read(dir.join("summary.json")) {
+            Ok(header) => match desal_io::file::read_regular_file(&dir.join("summary.json")) {
                 Ok(summary) => Some(Hit { hash: header.checksum, summary }),
                 // Gone with its artifact: another run is replacing the entry, a miss.
                 Err(_) if !path.exists() => None,
@@ -325,6 +325,7 @@ impl Cache {
         summary: &impl Serialize,
     ) -> Result<ContentHash> {
         let dir = self.entry_dir(key);
+        self.mark()?;
         let mut hash = None;
         desal_io::create_dir_once(&dir, |tmp| -> Result<()> {
             hash = Some(artifact::write_artifact(&tmp.join("artifact.dsa"), producer, body)?);
@@ -340,7 +341,7 @@ impl Cache {
             Some(hash) => hash,
             None => {
                 let path = dir.join("artifact.dsa");
-                let bytes = fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
+                let bytes = desal_io::file::read_regular_file(&path)?;
                 artifact::check_artifact::<T>(&path, &bytes)?.checksum
             }
         };
@@ -375,23 +376,104 @@ impl Cache {
     }
 }
 
+/// The file that marks a folder as a desal cache: a Cache Directory Tag
+/// (<https://bford.info/cachedir/>), which backup tools also honour. `desal cache gc`
+/// deletes only inside a folder that has it, or that has a desal cache's layout.
+pub const MARKER: &str = "CACHEDIR.TAG";
+const MARKER_TEXT: &str = "Signature: 8a477f597d28d172789f06886806bc55\n\
+    # This file is a cache directory tag created by desal (https://bford.info/cachedir/).\n\
+    # Everything in this folder can be recomputed; `desal cache gc` tidies it.\n";
+
 impl Cache {
+    /// Writes the marker at the root, once (every store calls it).
+    fn mark(&self) -> Result<()> {
+        let marker = self.root.join(MARKER);
+        if !marker.is_file() {
+            desal_io::write_atomic(&marker, MARKER_TEXT.as_bytes())?;
+        }
+        Ok(())
+    }
+
+    /// Whether the root is a desal cache that [`Self::gc`] may tidy: it has the marker,
+    /// does not exist yet, is empty, or has a desal cache's layout (a cache made before
+    /// the marker existed, which then gets it). Anything else — a folder of user files
+    /// given as `--cache-dir` by mistake — is refused with the first thing that is not
+    /// a cache's, before anything is run or deleted.
+    pub fn check_is_cache(&self) -> Result<()> {
+        let root = &self.root;
+        let meta = match fs::symlink_metadata(root) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+            other => other.with_context(|| format!("cannot read {}", root.display()))?,
+        };
+        if !fs::metadata(root).with_context(|| format!("cannot read {}", root.display()))?.is_dir() {
+            bail!("{} is not a folder, so not a desal cache", root.display());
+        }
+        let _ = meta;
+        if fs::symlink_metadata(root.join(MARKER)).is_ok_and(|m| m.is_file()) {
+            return Ok(());
+        }
+        let not_ours = |what: &Path, why: &str| {
+            anyhow::anyhow!(
+                "{} is not a desal cache ({MARKER} is missing and {} {why}); `desal cache gc` deletes only \
+                 inside a desal cache: check --cache-dir",
+                root.display(),
+                what.display()
+            )
+        };
+        let mut entries = 0;
+        for stage in fs::read_dir(root).with_context(|| format!("cannot read {}", root.display()))? {
+            let stage = stage.with_context(|| format!("cannot read {}", root.display()))?;
+            let name = stage.file_name().to_string_lossy().into_owned();
+            if name.starts_with('.') {
+                continue;
+            }
+            if !stage.file_type().is_ok_and(|t| t.is_dir()) {
+                return Err(not_ours(&stage.path(), "is not a stage folder"));
+            }
+            if name == "explain" {
+                continue;
+            }
+            for entry in fs::read_dir(stage.path())
+                .with_context(|| format!("cannot read {}", stage.path().display()))?
+            {
+                let entry = entry.with_context(|| format!("cannot read {}", stage.path().display()))?;
+                if entry.file_name().to_string_lossy().starts_with('.') {
+                    continue;
+                }
+                if !is_entry(&name, &entry) {
+                    return Err(not_ours(&entry.path(), "is not a cache entry"));
+                }
+                entries += 1;
+            }
+        }
+        if entries > 0 {
+            self.mark()?;
+        }
+        Ok(())
+    }
+
     /// Removes every entry whose key is not in `keep` (hex keys), each by
     /// rename-then-delete, plus dead runs' leftovers; returns `(entries kept, entries
     /// removed, bytes freed)`. `desal cache gc` passes the keys of a pipeline's stages.
     /// An entry of `derived_stage` (`desal eval`'s floor, which no pipeline key names) is
     /// kept when every input its `key.json` records is in `inputs` (content hashes).
+    ///
+    /// Only a desal cache is tidied ([`Self::check_is_cache`]), only an entry that proves
+    /// itself one is deleted (a real folder, not a symlink, whose `key.json` is the key
+    /// its stage folder and name say), and no symlink is ever followed.
     pub fn gc(
         &self,
         keep: &std::collections::BTreeSet<String>,
         derived_stage: &str,
         inputs: &std::collections::BTreeSet<ContentHash>,
     ) -> Result<(usize, usize, u64)> {
+        self.check_is_cache()?;
         let (mut kept, mut removed, mut freed) = (0, 0, 0);
         let Ok(stages) = fs::read_dir(&self.root) else { return Ok((0, 0, 0)) };
         for stage in stages.flatten() {
             let stage_dir = stage.path();
-            if !stage_dir.is_dir() || stage.file_name() == "explain" {
+            let stage_name = stage.file_name().to_string_lossy().into_owned();
+            if !stage.file_type().is_ok_and(|t| t.is_dir()) || stage_name == "explain" {
                 continue;
             }
             desal_io::dir::remove_leftovers(&stage_dir);
@@ -400,7 +482,7 @@ impl Cache {
             {
                 let entry = entry.with_context(|| format!("cannot read {}", stage_dir.display()))?;
                 let name = entry.file_name().to_string_lossy().into_owned();
-                if name.starts_with('.') || !entry.path().is_dir() {
+                if name.starts_with('.') || !is_entry(&stage_name, &entry) {
                     continue;
                 }
                 if keep.contains(&name) || uses_only(&entry.path(), derived_stage, inputs) {
@@ -425,6 +507,28 @@ impl Cache {
             }
         }
         Ok((kept, removed, freed))
+    }
+}
+
+/// Whether `entry`, in the stage folder `stage`, is a desal cache entry: a folder (not a
+/// symlink) holding only regular files, whose `key.json` is a key of that stage that
+/// hashes to the entry's name.
+fn is_entry(stage: &str, entry: &fs::DirEntry) -> bool {
+    if !entry.file_type().is_ok_and(|t| t.is_dir()) {
+        return false;
+    }
+    let dir = entry.path();
+    let Ok(files) = fs::read_dir(&dir) else { return false };
+    if !files.flatten().all(|f| f.file_type().is_ok_and(|t| t.is_file())) {
+        return false;
+    }
+    let key_file = dir.join("key.json");
+    if !fs::symlink_metadata(&key_file).is_ok_and(|m| m.is_file()) {
+        return false;
+    }
+    match desal_io::atomic::read_json::<StageKey>(&key_file) {
+        Ok(key) => key.stage == stage && key.hash().to_hex() == entry.file_name().to_string_lossy(),
+        Err(_) => false,
     }
 }
 

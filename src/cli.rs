@@ -253,8 +253,7 @@ pub fn map(args: &MapArgs) -> Result<()> {
     } else {
         // Another tool's mesh: every position is new as far as desal knows, so the
         // greedy rule maps it, exactly as for optimal placement.
-        let bytes = std::fs::read(&args.simplified)
-            .with_context(|| format!("cannot read {}", args.simplified.display()))?;
+        let bytes = desal_io::file::read_regular_file(&args.simplified)?;
         let mut mesh = desal_io::read_mesh(&args.simplified)?;
         mesh.faces = clean_faces_with_warnings(&args.simplified, &mesh.faces).0;
         (stages::simplify::external(&mesh), desal_io::ContentHash::of(&bytes))
@@ -470,7 +469,7 @@ fn read_saliency_values(path: &Path) -> Result<Vec<f64>> {
         })?;
         return Ok(values.iter().map(|&x| x as f64).collect());
     }
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let text = desal_io::file::read_text_file(path)?;
     text.lines()
         .enumerate()
         .map(|(i, line)| (i, line.trim()))

@@ -130,6 +130,9 @@ fn run(cli: Cli) -> Result<()> {
         Command::Eval(args) => desal::evaluate::eval(&args),
         Command::Cache { action: CacheAction::Gc { pipeline, out, cache_dir } } => {
             let loaded = desal::pipeline::load(&pipeline, out.as_deref())?;
+            let cache = desal::cache::Cache::for_output(cache_dir.as_deref(), &loaded.out_root);
+            // Before the run stores anything there: a folder of user files is refused.
+            cache.check_is_cache()?;
             let options = RunOptions {
                 out,
                 cache_dir: cache_dir.clone(),
@@ -141,7 +144,6 @@ fn run(cli: Cli) -> Result<()> {
                 runs.iter().flat_map(|r| r.report.stages.iter().map(|s| s.cache_key.clone())).collect();
             // `desal eval`'s floors of these pose sets and labels are kept too.
             let inputs = runs.iter().flat_map(|r| [r.stages.poses.hash, r.stages.labels.hash]).collect();
-            let cache = desal::cache::Cache::for_output(cache_dir.as_deref(), &loaded.out_root);
             let (kept, removed, freed) = cache.gc(&keep, desal::evaluate::floor::STAGE, &inputs)?;
             println!(
                 "{}: kept {kept} entries, removed {removed} ({:.1} MB)",

@@ -231,7 +231,7 @@ fn add_artifact(outputs: &mut DatasetOutputs, name: &str, artifact: &Path, summa
 }
 
 /// The registered simplified pose set, the one writer of it: `<poses_dir><pose>.ply` for
-/// every pose, `<poses_dir>parts.txt`, and `vertex_map.txt` (one original index per
+/// every pose (the name through [`desal_io::confine::file_stems_for`]), `<poses_dir>parts.txt`, and `vertex_map.txt` (one original index per
 /// simplified vertex, in simplified-vertex order).
 pub fn simplified_pose_set(
     poses_dir: &str,
@@ -247,11 +247,14 @@ pub fn simplified_pose_set(
         format!("{poses_dir}parts.txt"),
         Box::new(move |p| Ok(desal_io::labels::write_labels_txt(p, &labels)?)),
     ));
+    // Pose names come from files (a rig's animation names): one rule makes each a file
+    // name inside `poses_dir`, ordinary names unchanged.
+    let stems = desal_io::confine::file_stems_for(&set.names);
     let set = std::sync::Arc::new(set);
-    for pose in 0..set.pose_count() {
+    for (pose, stem) in stems.into_iter().enumerate() {
         let set = set.clone();
         files.push((
-            format!("{poses_dir}{}.ply", set.names[pose]),
+            format!("{poses_dir}{stem}.ply"),
             Box::new(move |p| Ok(write_ply(p, &set.pose_mesh(pose), &PlyWriteOptions::default())?)),
         ));
     }
@@ -261,17 +264,29 @@ pub fn simplified_pose_set(
 /// Writes loose output files (a single-stage command's artifact and pictures) all or
 /// nothing: each goes to a temp name beside its destination first, and only when every
 /// one is written are they renamed into place. A failure leaves none of them.
+///
+/// What may be replaced is [`desal_io::confine::write_target`]'s rule, checked for every
+/// destination before anything is written: a character device (`-o /dev/null`) is
+/// written through last, never renamed over; a folder, FIFO or socket is refused.
 pub fn write_all_or_nothing(files: Vec<(PathBuf, FileWriter)>) -> Result<()> {
+    use desal_io::confine::{WriteTarget, write_target};
     let pid = std::process::id();
     let partial = |dest: &Path| {
         let name = dest.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
         dest.with_file_name(format!(".{name}.partial-{pid}"))
     };
+    let mut targets = Vec::with_capacity(files.len());
+    for (dest, write) in files {
+        let target = write_target(&dest).with_context(|| format!("cannot write {}", dest.display()))?;
+        targets.push((dest, write, target));
+    }
     let mut written: Vec<(PathBuf, PathBuf)> = Vec::new();
+    let mut devices: Vec<(PathBuf, FileWriter)> = Vec::new();
     let result = (|| -> Result<()> {
-        for (dest, write) in files {
-            if dest.is_dir() {
-                bail!("{} is a folder: give a file path", dest.display());
+        for (dest, write, target) in targets {
+            if target == WriteTarget::Device {
+                devices.push((dest, write));
+                continue;
             }
             let tmp = partial(&dest);
             written.push((tmp.clone(), dest.clone()));
@@ -286,8 +301,12 @@ pub fn write_all_or_nothing(files: Vec<(PathBuf, FileWriter)>) -> Result<()> {
         for (tmp, _) in &written {
             let _ = std::fs::remove_file(tmp);
         }
+        return result;
     }
-    result
+    for (dest, write) in devices {
+        write(&dest).with_context(|| format!("cannot write {}", dest.display()))?;
+    }
+    Ok(())
 }
 
 /// Identifies a dataset's output folder content: every stage's cache key, plus what the

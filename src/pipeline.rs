@@ -161,8 +161,7 @@ pub struct Pipeline {
 
 /// Reads and resolves a pipeline file. `out_override` replaces the file's `out`.
 pub fn load(path: &Path, out_override: Option<&Path>) -> Result<Pipeline> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("cannot read pipeline file {}", path.display()))?;
+    let text = desal_io::file::read_text_file(path).context("cannot read the pipeline file")?;
     parse(path, &text, out_override)
 }
 
@@ -196,8 +195,16 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
             .try_into()
             .with_context(|| format!("{}: dataset #{} ({})", path.display(), k + 1, dataset_name(table)))?;
         check_dataset_name(&spec.name).with_context(|| format!("{}: dataset #{}", path.display(), k + 1))?;
-        if datasets.iter().any(|d: &Dataset| d.spec.name == spec.name) {
-            bail!("{}: two datasets are named '{}'; names must be unique", path.display(), spec.name);
+        // Compared case-insensitively: "R" and "r" are one folder on macOS and Windows.
+        if let Some(other) = datasets.iter().find(|d: &&Dataset| d.spec.name.eq_ignore_ascii_case(&spec.name))
+        {
+            bail!(
+                "{}: two datasets are named '{}' and '{}'; names must be unique, ignoring case (they would share \
+                 one output folder on a case-insensitive file system)",
+                path.display(),
+                other.spec.name,
+                spec.name
+            );
         }
         let in_dataset = || format!("{}: dataset '{}'", path.display(), spec.name);
         let (pose_files, labels, rig_file) = match (&spec.rig, &spec.poses, &spec.labels) {
@@ -270,15 +277,25 @@ fn check_parameters(spec: &DatasetToml, pose_files: &[PathBuf]) -> Result<()> {
     Ok(())
 }
 
+/// The longest dataset name: the output folder's temp names (`.NAME.tmp-PID-N`) and the
+/// cache's record file names must stay under the 255 bytes of a file name.
+pub const MAX_DATASET_NAME: usize = 100;
+
 /// A dataset's name is its output sub-folder, so it must stay one plain folder name:
 /// letters, digits, `-`, `_` and `.`, not starting with `.` (no `..`, no hidden folder, no
-/// path that escapes the output root).
+/// path that escapes the output root), at most [`MAX_DATASET_NAME`] characters.
 fn check_dataset_name(name: &str) -> Result<()> {
     let plain = |c: char| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.');
     if name.is_empty() || name.starts_with('.') || !name.chars().all(plain) {
         bail!(
             "dataset name {name:?} cannot be a folder name: use letters, digits, '-', '_' and '.', \
              not starting with '.'"
+        );
+    }
+    if name.len() > MAX_DATASET_NAME {
+        bail!(
+            "dataset name '{name}' is {} characters long; at most {MAX_DATASET_NAME} are allowed",
+            name.len()
         );
     }
     Ok(())
@@ -404,6 +421,22 @@ target_vertices = 50
             let err = format!("{:#}", parse(p, &text, None).unwrap_err());
             assert!(err.contains("cannot be a folder name"), "{bad}: {err}");
         }
+    }
+
+    /// D18: names that collide on a case-insensitive file system, and names too long for
+    /// a file name, are refused when the file is read.
+    #[test]
+    fn d18_names_differing_in_case_and_overlong_names_are_refused() {
+        let p = Path::new("x.toml");
+        let dataset = |name: &str| format!("[[dataset]]\nname={name:?}\nposes=['x.ply']\nlabels='l'\n");
+        let text = format!("schema = 1\n{}{}", dataset("R"), dataset("r"));
+        let err = format!("{:#}", parse(p, &text, None).unwrap_err());
+        assert!(err.contains("'R' and 'r'") && err.contains("ignoring case"), "{err}");
+        let long = "a".repeat(300);
+        let err = format!("{:#}", parse(p, &format!("schema = 1\n{}", dataset(&long)), None).unwrap_err());
+        assert!(err.contains("300 characters"), "{err}");
+        let ok = "a".repeat(MAX_DATASET_NAME);
+        assert!(parse(p, &format!("schema = 1\n{}", dataset(&ok)), None).is_ok());
     }
 
     #[test]

@@ -48,6 +48,7 @@ use crate::progress::ProgressMode;
 use crate::run::{DatasetRun, RunOptions};
 use crate::stages::DatasetStages;
 use crate::stages::simplify::SimplifyParams;
+use desal_io::confine::file_stem_for;
 use figures::{GridRow, Views};
 use measure::{Deformed, MeanStd, Measured, Run};
 use methods::{BASELINE, Inputs, Method, SimplifiedSet};
@@ -610,17 +611,18 @@ fn write_figures(
         let name = run.method.name();
         let title = format!("{name}: face area");
         jobs.push((
-            format!("face-area/{name}.png"),
+            format!("face-area/{}.png", file_stem_for(&name)),
             Box::new(move || figures::face_area_png(views, template, &title, area_range)),
         ));
     }
     let (rms_mm, shown_mm, deformed_mesh) = (&rms_mm, &shown_mm, &deformed_mesh);
+    let stems = &desal_io::confine::file_stems_for(&poses.names);
     for (m, run) in runs.iter().enumerate() {
         let name = run.method.name();
         let first = shown[0];
         let title = format!("{name}: RMS error, all poses (on {})", poses.names[first]);
         jobs.push((
-            format!("errors/{name}-rms.png"),
+            format!("errors/{}.png", file_stem_for(&format!("{name}-rms"))),
             Box::new(move || {
                 figures::error_png(views, &deformed_mesh(run, first), &rms_mm[m], &title, error_range)
             }),
@@ -628,7 +630,7 @@ fn write_figures(
         for (k, &pose) in shown.iter().enumerate() {
             let title = format!("{name}: {}", poses.names[pose]);
             jobs.push((
-                format!("errors/{name}-{}.png", poses.names[pose]),
+                format!("errors/{}-{}.png", file_stem_for(&name), stems[pose]),
                 Box::new(move || {
                     figures::error_png(views, &deformed_mesh(run, pose), &shown_mm[m][k], &title, error_range)
                 }),
@@ -658,12 +660,14 @@ fn write_figures(
 /// the simplified ground truth they are measured against.
 fn save_deformed(dir: &Path, poses: &PoseSet, evaluated: &[usize], runs: &[MethodRun]) -> Result<()> {
     let mut jobs: Vec<(PathBuf, TriMesh)> = Vec::new();
+    // Pose names come from files (a rig's animation names): one rule makes each a file name.
+    let stems = desal_io::confine::file_stems_for(&poses.names);
     for run in runs {
-        let base = dir.join("deformed").join(run.method.name());
+        let base = dir.join("deformed").join(file_stem_for(&run.method.name()));
         let faces = &run.set.mapped.poses.faces;
         let mesh = |positions: &[Vec3]| TriMesh { positions: positions.to_vec(), faces: faces.clone() };
         for &pose in evaluated {
-            let file = format!("{}.ply", poses.names[pose]);
+            let file = format!("{}.ply", stems[pose]);
             jobs.push((base.join("in-sample").join(&file), mesh(&run.deformed.in_sample[pose])));
             let held_out = run.deformed.held_out[pose].as_ref().expect("evaluated poses are held out");
             jobs.push((base.join("held-out").join(&file), mesh(held_out)));

@@ -161,7 +161,7 @@ pub fn hash_files(files: &[PathBuf]) -> Result<Vec<ContentHash>> {
     files
         .par_iter()
         .map(|f| {
-            let bytes = std::fs::read(f).with_context(|| format!("cannot read {}", f.display()))?;
+            let bytes = desal_io::file::read_regular_file(f)?;
             Ok(ContentHash::of(&bytes))
         })
         .collect()

@@ -23,7 +23,7 @@ pub const TARGET_KEYS: [&str; 3] = ["target_vertices", "target_faces", "ratio"];
 /// ([`SimplifyConfig::default`]), so pipeline files, `desal-simplify` and the library
 /// agree (README, "Defaults").
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
+#[serde(from = "SimplifyFile")]
 pub struct SimplifyParams {
     /// Target vertex count (the paper: 2500). At most one of the three targets is
     /// given; none means the library's default target (`ratio = 0.2`).
@@ -67,6 +67,70 @@ pub struct SimplifyParams {
     /// stage 3).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub method: Option<Method>,
+    /// Which of the settings a `method` makes itself (`placement`, `saliency`, `balance`,
+    /// `metric`, `normalized_error`) the file or the caller gave, by key: beside a method,
+    /// a given one must have the method's value, even when it is the default. Not part
+    /// of any key.
+    #[serde(skip)]
+    pub given: Vec<&'static str>,
+}
+
+/// `[simplify]` as a file spells it, for [`SimplifyParams`]' `Deserialize`: the settings
+/// a method makes itself are `None` when absent, so that a method can tell a given
+/// setting from a default one.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SimplifyFile {
+    target_vertices: Option<usize>,
+    target_faces: Option<usize>,
+    ratio: Option<f64>,
+    #[serde(default, deserialize_with = "some_by_name")]
+    placement: Option<Placement>,
+    saliency: Option<bool>,
+    balance: Option<bool>,
+    keep_part_borders: Option<bool>,
+    #[serde(default, deserialize_with = "some_by_name")]
+    metric: Option<Metric>,
+    boundary_weight: Option<f64>,
+    normalized_error: Option<bool>,
+    seams: Option<Seams>,
+    method: Option<Method>,
+}
+
+fn some_by_name<'de, T, D>(deserializer: D) -> std::result::Result<Option<T>, D::Error>
+where
+    T: std::str::FromStr<Err = String>,
+    D: serde::Deserializer<'de>,
+{
+    crate::cache::by_name::deserialize(deserializer).map(Some)
+}
+
+impl From<SimplifyFile> for SimplifyParams {
+    fn from(file: SimplifyFile) -> Self {
+        let default = SimplifyParams::default();
+        let given = [
+            ("placement", file.placement.is_some()),
+            ("saliency", file.saliency.is_some()),
+            ("balance", file.balance.is_some()),
+            ("metric", file.metric.is_some()),
+            ("normalized_error", file.normalized_error.is_some()),
+        ];
+        SimplifyParams {
+            target_vertices: file.target_vertices,
+            target_faces: file.target_faces,
+            ratio: file.ratio,
+            placement: file.placement.unwrap_or(default.placement),
+            saliency: file.saliency.unwrap_or(default.saliency),
+            balance: file.balance.unwrap_or(default.balance),
+            keep_part_borders: file.keep_part_borders.unwrap_or(default.keep_part_borders),
+            metric: file.metric.unwrap_or(default.metric),
+            boundary_weight: file.boundary_weight,
+            normalized_error: file.normalized_error.unwrap_or(default.normalized_error),
+            seams: file.seams,
+            method: file.method,
+            given: given.into_iter().filter(|&(_, g)| g).map(|(key, _)| key).collect(),
+        }
+    }
 }
 
 /// `method = "desal" | "desal-refit"` (see [`SimplifyParams::method`]).
@@ -114,6 +178,7 @@ impl Default for SimplifyParams {
             normalized_error: library.normalized_error,
             seams: None,
             method: None,
+            given: Vec::new(),
         }
     }
 }
@@ -163,8 +228,9 @@ impl SimplifyParams {
         Ok(config)
     }
 
-    /// A setting `method` makes itself may be left at its default or given the method's
-    /// value; any other value is an error (it would be silently replaced).
+    /// A setting `method` makes itself may be left out or given the method's value; any
+    /// other value is an error (it would be silently replaced), the default included when
+    /// it was given ([`Self::given`]).
     fn check_method_settings(&self, method: Method) -> Result<()> {
         let default = SimplifyParams::default();
         let desal = desal_settings(SimplifyConfig::default());
@@ -193,7 +259,7 @@ impl SimplifyParams {
             ),
         ];
         for (key, value, default, wanted) in settings {
-            if value != default && value != wanted {
+            if value != wanted && (value != default || self.given.contains(&key)) {
                 bail!(
                     "simplify: method = \"{}\" sets {key} = {wanted} itself; remove {key} = {value}",
                     method.name()
@@ -691,6 +757,36 @@ mod tests {
         let lt = SimplifyParams { metric: Metric::LindstromTurk, ..parsed };
         let err = lt.config().unwrap_err().to_string();
         assert!(err.contains("sets metric = \"quadric\" itself"), "{err}");
+    }
+
+    /// D13: beside a method, a setting the method makes itself is refused when given
+    /// with another value than the method's, even when that value is the default (which
+    /// the method would silently replace); left out, or given the method's value, it is
+    /// accepted; and the keys of every accepted file are those of today.
+    #[test]
+    fn d13_a_given_default_beside_a_method_is_refused() {
+        let parse = |text: &str| toml::from_str::<SimplifyParams>(text).unwrap();
+        for (key, value) in [
+            ("placement", "\"optimal\""),
+            ("saliency", "true"),
+            ("normalized_error", "false"),
+            ("balance", "true"),
+        ] {
+            let params = parse(&format!("method = \"desal-refit\"\n{key} = {value}"));
+            let err = params.config().unwrap_err().to_string();
+            assert!(err.contains(&format!("remove {key} = {value}")), "{key}: {err}");
+        }
+        for text in [
+            "method = \"desal-refit\"\nplacement = \"subset\"\nsaliency = false",
+            "method = \"desal\"\nnormalized_error = true\nmetric = \"quadric\"",
+        ] {
+            assert!(parse(text).config().is_ok(), "{text}");
+        }
+        // Without a method a given default is the default: the same key as before.
+        let hash = ContentHash::of(b"x");
+        let given = parse("placement = \"optimal\"\nsaliency = true\nbalance = false");
+        let plain = SimplifyParams::default();
+        assert_eq!(given.key(hash, hash, hash).unwrap(), plain.key(hash, hash, hash).unwrap());
     }
 
     /// The pipeline's defaults are the library's, field by field.

@@ -5,6 +5,7 @@ mod cache;
 mod eval;
 mod faults;
 mod hierarchy;
+mod hostile;
 mod ingest;
 mod parts;
 mod rig;

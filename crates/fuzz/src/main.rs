@@ -2,7 +2,7 @@
 //! and exits non-zero on any panic, abort or hang, saving each crashing input.
 //!
 //! ```text
-//! desal-fuzz [--targets all|ply,obj,off,labels-text,labels-json,artifact]
+//! desal-fuzz [--targets all|ply,obj,off,labels-text,labels-json,artifact,gltf-json,gltf-glb,npz]
 //!            [--seconds 60] [--iterations N] [--seed 1] [--out target/fuzz-findings]
 //!            [--memory-mb 2048] [--timeout-secs 10] [--corpus-root <checkout>]
 //! ```
@@ -70,7 +70,15 @@ fn run(args: Vec<String>) -> i32 {
         }
     }
     if let Some(target) = worker {
-        return supervise::worker(target, options.seed, start, end, options.seconds, &options.corpus_root);
+        return supervise::worker(supervise::WorkerOptions {
+            target,
+            seed: options.seed,
+            start,
+            end,
+            seconds: options.seconds,
+            memory_mb: options.memory_mb,
+            corpus_root: options.corpus_root,
+        });
     }
     if options.seconds.is_none() && options.iterations.is_none() {
         options.seconds = Some(60.0);

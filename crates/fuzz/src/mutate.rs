@@ -1,6 +1,11 @@
 //! The mutations: what a damaged file, a hand edit or a forger does to bytes. Each input
 //! gets one to four stacked mutations, chosen by a seeded RNG, so a run is reproducible
-//! from `(seed, target, iteration)` alone.
+//! from `(seed, target, iteration)` alone. The containers whose checks would refuse
+//! nearly every byte mutant have structural mutations of their own: [`gltf`] (`.gltf`
+//! and `.glb` rigs) and [`npz`] (`hierarchy.npz`).
+
+pub mod gltf;
+pub mod npz;
 
 use rand::Rng;
 use rand::seq::SliceRandom;
@@ -84,11 +89,44 @@ const KEYWORDS: [&str; 34] = [
     "null",
 ];
 
+/// Text that user-given names (parts, joints, animations) hold and readers of names get
+/// wrong: combining marks, right-to-left text and its override, a zero-width joiner
+/// sequence, a byte-order mark, a NUL, a line separator, non-ASCII digits, and JSON
+/// escapes of a NUL and of lone surrogates.
+const UNICODE_TEXT: [&str; 14] = [
+    "e\u{301}\u{301}",
+    "\u{5d9}\u{5d3}",
+    "\u{202e}",
+    "\u{1f469}\u{200d}\u{1f52c}",
+    "\u{feff}",
+    "\u{0}",
+    "\u{2028}",
+    "\u{663}\u{ff11}",
+    "\u{10ffff}",
+    "\\u0000",
+    "\\ud800",
+    "\\udc00\\ud800",
+    "\\ud83d\\ude00",
+    "\u{1d573}",
+];
+
+/// Byte sequences that are not UTF-8: overlong encodings of `/` and NUL, a UTF-16
+/// surrogate, a code point past U+10FFFF, a lone continuation byte, a cut sequence.
+const BAD_UTF8: [&[u8]; 7] = [
+    &[0xc0, 0xaf],
+    &[0xc0, 0x80],
+    &[0xe0, 0x80, 0xaf],
+    &[0xed, 0xa0, 0x80],
+    &[0xf4, 0x90, 0x80, 0x80],
+    &[0x80],
+    &[0xe2, 0x82],
+];
+
 /// A mutated copy of `seed`; `donor` is another seed of the same target, for splices.
 pub fn mutate(rng: &mut ChaCha8Rng, seed: &[u8], donor: &[u8]) -> Vec<u8> {
     let mut bytes = seed.to_vec();
     for _ in 0..rng.gen_range(1..=4) {
-        match rng.gen_range(0..9) {
+        match rng.gen_range(0..10) {
             0 => flip_bits(rng, &mut bytes),
             1 => set_byte(rng, &mut bytes),
             2 => insert_bytes(rng, &mut bytes),
@@ -97,6 +135,7 @@ pub fn mutate(rng: &mut ChaCha8Rng, seed: &[u8], donor: &[u8]) -> Vec<u8> {
             5 => write_integer(rng, &mut bytes),
             6 => write_varint_length(rng, &mut bytes),
             7 => replace_number_token(rng, &mut bytes),
+            8 => insert_unicode(rng, &mut bytes),
             _ => edit_header_line(rng, &mut bytes),
         }
     }
@@ -150,6 +189,22 @@ fn splice(rng: &mut ChaCha8Rng, bytes: &[u8], donor: &[u8]) -> Vec<u8> {
     let cut = rng.gen_range(0..=bytes.len());
     let from = rng.gen_range(0..=donor.len());
     [&bytes[..cut], &donor[from..]].concat()
+}
+
+/// Tricky text ([`UNICODE_TEXT`]) or bytes that are not UTF-8 ([`BAD_UTF8`]), inserted
+/// or written over a character, at the start of a name when the input has one: after a
+/// `"`, a `=` or a space, where the formats keep part names.
+fn insert_unicode(rng: &mut ChaCha8Rng, bytes: &mut Vec<u8>) {
+    let new: &[u8] = if rng.gen_bool(0.7) {
+        UNICODE_TEXT.choose(rng).expect("non-empty").as_bytes()
+    } else {
+        BAD_UTF8.choose(rng).expect("non-empty")
+    };
+    let start = offset(rng, bytes.len() + 1).min(bytes.len());
+    let at =
+        bytes[start..].iter().position(|b| matches!(b, b'"' | b'=' | b' ')).map_or(start, |k| start + k + 1);
+    let end = if rng.gen_bool(0.3) { (at + 1).min(bytes.len()) } else { at };
+    bytes.splice(at..end, new.iter().copied());
 }
 
 /// An interesting integer, 1, 2, 4 or 8 bytes wide, little- or big-endian, over the

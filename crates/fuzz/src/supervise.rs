@@ -2,9 +2,19 @@
 //! `--worker`), so that an abort (or an allocation past the child's memory limit, which
 //! aborts it) fails the run instead of ending it, and under a watchdog, so that a hang
 //! does too. The child reports `S <i>` before running input `i`, `P <i> <message>` for
-//! a panic it caught, and `D <executed> <accepted>` when its segment is done; after a
-//! crash or a hang the parent regenerates input `i` (it depends only on the seed, the
-//! target and `i`), saves it, and starts a new child at `i + 1`.
+//! a panic it caught, `M <i> <message>` when input `i` drove its peak memory past half
+//! the limit (then it exits with [`MEMORY_EXIT`]), and `D <executed> <accepted>` when its
+//! segment is done; after a crash, a hang or a memory finding the parent regenerates
+//! input `i` (it depends only on the seed, the target and `i`), saves it, and starts a
+//! new child at `i + 1`.
+//!
+//! The memory check catches what the limit alone misses: a reader that grows a buffer
+//! with `try_reserve` (as `std::fs::read` does) gets an error at the limit and refuses
+//! the input cleanly, though without a limit it would have read `/dev/zero` until the
+//! machine ran out. The child runs its inputs on a thread with a 2 MiB stack, the size
+//! of the threads desal's readers run on (std's default for spawned threads, which
+//! rayon's workers in `desal run --jobs` use), so a recursion that would overflow there
+//! overflows here too.
 
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
@@ -33,10 +43,17 @@ pub struct Options {
     pub corpus_root: PathBuf,
 }
 
+/// The exit status of a worker that stopped after a memory finding.
+pub const MEMORY_EXIT: i32 = 5;
+
+/// The stack of the thread a worker runs its inputs on, in bytes.
+pub const WORKER_STACK: usize = 2 << 20;
+
 /// What went wrong on one input.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Finding {
-    /// `panic`, `abort` (the child died) or `timeout`.
+    /// `panic`, `abort` (the child died), `memory` (peak memory past half the limit) or
+    /// `timeout`.
     pub kind: &'static str,
     pub iteration: u64,
     pub message: String,
@@ -78,6 +95,7 @@ pub fn fuzz_target(exe: &Path, target: Target, options: &Options) -> Result<Targ
         let mut child = spawn_worker(exe, target, options, next, end, left)?;
         let lines = read_lines(&mut child);
         let mut last_started: Option<u64> = None;
+        let mut memory_finding: Option<u64> = None;
         let outcome = loop {
             match lines.recv_timeout(options.timeout) {
                 Ok(line) => {
@@ -90,6 +108,11 @@ pub fn fuzz_target(exe: &Path, target: Target, options: &Options) -> Result<Targ
                         (Some("P"), Some(i)) => {
                             let message = words.next().unwrap_or("").to_owned();
                             report.findings.push(save(target, &seeds, options, "panic", i, message)?);
+                        }
+                        (Some("M"), Some(i)) => {
+                            let message = words.next().unwrap_or("").to_owned();
+                            report.findings.push(save(target, &seeds, options, "memory", i, message)?);
+                            memory_finding = Some(i);
                         }
                         (Some("D"), Some(_)) => {
                             let accepted = words.next().and_then(|w| w.parse().ok()).unwrap_or(0);
@@ -116,6 +139,10 @@ pub fn fuzz_target(exe: &Path, target: Target, options: &Options) -> Result<Targ
         };
         if status.success() {
             break; // the segment ran to its end or its deadline
+        }
+        if let (Some(i), Some(MEMORY_EXIT)) = (memory_finding, status.code()) {
+            next = i + 1;
+            continue;
         }
         let i = last_started.unwrap_or(next);
         report.findings.push(save(target, &seeds, options, "abort", i, describe_exit(&status))?);
@@ -162,7 +189,9 @@ fn spawn_worker(
             .arg("sh")
             .arg((options.memory_mb * 1024).to_string())
             .arg(exe)
-            .args(&args);
+            .args(&args)
+            .arg("--memory-mb")
+            .arg(options.memory_mb.to_string());
         c
     } else {
         let mut c = Command::new(exe);
@@ -234,16 +263,34 @@ fn save(
 /// The panic message of the current input, set by the worker's panic hook.
 static LAST_PANIC: Mutex<Option<String>> = Mutex::new(None);
 
-/// The child side: runs inputs `start..end` of `target` (or until `seconds` pass),
-/// reporting on stdout as the module doc describes.
-pub fn worker(
-    target: Target,
-    seed: u64,
-    start: u64,
-    end: u64,
-    seconds: Option<f64>,
-    corpus_root: &Path,
-) -> i32 {
+/// What a worker runs.
+#[derive(Debug, Clone)]
+pub struct WorkerOptions {
+    pub target: Target,
+    pub seed: u64,
+    /// Inputs `start..end`.
+    pub start: u64,
+    pub end: u64,
+    /// Or until this many seconds pass.
+    pub seconds: Option<f64>,
+    /// The child's memory limit in MiB: an input that drives the peak past half of it
+    /// is a memory finding.
+    pub memory_mb: u64,
+    pub corpus_root: PathBuf,
+}
+
+/// The child side: runs the inputs of `options` on a thread with a [`WORKER_STACK`]
+/// stack, reporting on stdout as the module doc describes; returns the exit status.
+pub fn worker(options: WorkerOptions) -> i32 {
+    std::thread::Builder::new()
+        .name("desal-fuzz worker".into())
+        .stack_size(WORKER_STACK)
+        .spawn(move || run_worker(&options))
+        .map_or(2, |thread| thread.join().unwrap_or(3))
+}
+
+fn run_worker(options: &WorkerOptions) -> i32 {
+    let WorkerOptions { target, seed, start, end, seconds, memory_mb, ref corpus_root } = *options;
     let seeds = match corpus::seeds(target, corpus_root) {
         Ok(s) => s,
         Err(e) => {
@@ -277,7 +324,24 @@ pub fn worker(
                 let _ = writeln!(out, "P {iteration} {}", message.replace(['\n', '\r'], " "));
             }
         }
+        if let Some(peak) = peak_memory_mib()
+            && peak > memory_mb / 2
+        {
+            let _ =
+                writeln!(out, "M {iteration} peak memory {peak} MiB, over half the {memory_mb} MiB limit");
+            let _ = writeln!(out, "D {executed} {accepted}");
+            let _ = out.flush();
+            return MEMORY_EXIT;
+        }
     }
     let _ = writeln!(out, "D {executed} {accepted}");
     0
+}
+
+/// The peak resident memory of this process in MiB (`VmHWM`; Linux only, else `None`).
+fn peak_memory_mib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024)
 }

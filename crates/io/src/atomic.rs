@@ -12,10 +12,23 @@ use crate::error::IoError;
 /// Writes a file atomically with `fill`, which receives a buffered writer. Creates the
 /// parent directory. On any error the temp file is removed and the destination is
 /// untouched.
+///
+/// What may be replaced is [`crate::confine::write_target`]'s rule: a character device
+/// (`-o /dev/null`) is written through, as `cp` does, never renamed over; a directory,
+/// FIFO, socket or block device is refused before anything is written.
 pub fn write_atomic_with(
     path: &Path,
     fill: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
 ) -> Result<(), IoError> {
+    if crate::confine::write_target(path)? == crate::confine::WriteTarget::Device {
+        let result = (|| {
+            let file = fs::OpenOptions::new().write(true).open(path)?;
+            let mut w = BufWriter::with_capacity(1 << 16, file);
+            fill(&mut w)?;
+            w.flush()
+        })();
+        return result.map_err(|e| IoError::io(path, e));
+    }
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     fs::create_dir_all(dir).map_err(|e| IoError::io(dir, e))?;
     let tmp = temp_path(path);
@@ -25,6 +38,12 @@ pub fn write_atomic_with(
         fill(&mut w)?;
         let file = w.into_inner().map_err(|e| e.into_error())?;
         file.sync_all()?;
+        // Checked again at the last moment: never rename over what is not a regular file.
+        if crate::confine::write_target(path).map_err(std::io::Error::other)?
+            != crate::confine::WriteTarget::Replace
+        {
+            return Err(std::io::Error::other("became a device while it was written; not replaced"));
+        }
         fs::rename(&tmp, path)
     })();
     result.map_err(|e| {

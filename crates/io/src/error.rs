@@ -109,6 +109,11 @@ pub enum IoError {
     #[error("{path}: '{kind}' artifact is inconsistent: {reason}; delete it and re-run the stage")]
     InvalidArtifact { path: PathBuf, kind: &'static str, reason: String },
 
+    /// A path found inside a file (a glTF buffer or image URI) that desal will not follow:
+    /// outside the folder of the file that names it, a URL, or not a regular file.
+    #[error("{path}: {element}: URI '{uri}' {reason}")]
+    Confined { path: PathBuf, element: String, uri: String, reason: String },
+
     /// JSON could not be read or written.
     #[error("{path}: {reason}")]
     Json { path: PathBuf, reason: String },

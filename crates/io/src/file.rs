@@ -45,7 +45,7 @@ fn check_regular(path: &Path, meta: &std::fs::Metadata) -> Result<(), IoError> {
 }
 
 /// A name for a file type that is not a regular file.
-fn describe_type(file_type: &std::fs::FileType) -> &'static str {
+pub(crate) fn describe_type(file_type: &std::fs::FileType) -> &'static str {
     if file_type.is_dir() {
         return "a directory";
     }

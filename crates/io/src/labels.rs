@@ -141,18 +141,69 @@ fn check_part_ids(
 }
 
 /// Names from a comment like ` ids: 0=lefthand, 1=leftlowerarm`, or a header like
-/// ` parts: lefthand leftlowerarm` (names by position, separated by whitespace).
+/// ` parts: lefthand leftlowerarm` (names by position, separated by whitespace). Names
+/// are percent-decoded ([`escape_name`] is what the writer does to a name that holds a
+/// separator, a line break or `%`); a `%` not followed by two hex digits stays as it is.
 fn parse_names_comment(comment: &str) -> Vec<(u32, String)> {
     if let Some(list) = comment.trim().strip_prefix("parts:") {
-        return list.split_whitespace().enumerate().map(|(k, name)| (k as u32, name.to_owned())).collect();
+        return list
+            .split_whitespace()
+            .enumerate()
+            .map(|(k, name)| (k as u32, unescape_name(name)))
+            .collect();
     }
     let Some(list) = comment.trim().strip_prefix("ids:") else { return Vec::new() };
     list.split(',')
         .filter_map(|item| {
             let (id, name) = item.split_once('=')?;
-            Some((id.trim().parse().ok()?, name.trim().to_owned()))
+            Some((id.trim().parse().ok()?, unescape_name(name.trim())))
         })
         .collect()
+}
+
+/// A part name as the `# ids:` comment writes it: `%`, `,`, `=`, control characters
+/// (line breaks included) and whitespace at either end are written `%XX` (UTF-8 bytes),
+/// so every name reads back as it was. Other names are written unchanged.
+fn escape_name(name: &str) -> String {
+    let last = name.chars().count().saturating_sub(1);
+    let mut out = String::with_capacity(name.len());
+    for (i, c) in name.chars().enumerate() {
+        let edge = (i == 0 || i == last) && c.is_whitespace();
+        if edge || c.is_control() || matches!(c, '%' | ',' | '=') {
+            let mut buf = [0u8; 4];
+            for b in c.encode_utf8(&mut buf).bytes() {
+                out.push_str(&format!("%{b:02X}"));
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// The inverse of [`escape_name`], lenient: a `%` that does not start a valid escape, or
+/// escapes that do not make UTF-8, are kept as written.
+fn unescape_name(text: &str) -> String {
+    if !text.contains('%') {
+        return text.to_owned();
+    }
+    let bytes = text.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = bytes.get(i + 1..i + 3).and_then(|h| std::str::from_utf8(h).ok());
+        match hex.filter(|_| bytes[i] == b'%').and_then(|h| u8::from_str_radix(h, 16).ok()) {
+            Some(b) => {
+                out.push(b);
+                i += 3;
+            }
+            None => {
+                out.push(bytes[i]);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8(out).unwrap_or_else(|_| text.to_owned())
 }
 
 /// Writes labels as text: a comment naming the parts, then one id per line.
@@ -164,7 +215,8 @@ pub fn write_labels_txt(path: &Path, labels: &PartLabels) -> Result<(), IoError>
 pub fn labels_txt(labels: &PartLabels) -> String {
     let mut text = String::with_capacity(labels.labels.len() * 3 + 64);
     text.push_str("# one line per vertex, value = part id\n# ids: ");
-    let names: Vec<String> = labels.names.iter().enumerate().map(|(k, n)| format!("{k}={n}")).collect();
+    let names: Vec<String> =
+        labels.names.iter().enumerate().map(|(k, n)| format!("{k}={}", escape_name(n))).collect();
     text.push_str(&names.join(", "));
     text.push('\n');
     for id in &labels.labels {
@@ -180,4 +232,28 @@ pub fn write_labels_json(path: &Path, labels: &PartLabels) -> Result<(), IoError
         path,
         &LabelsJson { parts: labels.names.clone(), labels: labels.labels.clone() },
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// D11: joint names with line breaks, spaces, separators and `%` read back as written;
+    /// ordinary names are written as before.
+    #[test]
+    fn d11_part_names_with_separators_and_line_breaks_read_back() {
+        let names: Vec<String> =
+            ["hips", "mixamorig:Left Hand", "a\nb", " padded ", "x,y=z", "50%", "%41", "名前", ""]
+                .map(str::to_owned)
+                .to_vec();
+        let labels = PartLabels::try_new((0..names.len() as u32).collect(), names.clone()).unwrap();
+        let text = labels_txt(&labels);
+        assert!(text.contains("0=hips, 1=mixamorig:Left Hand, 2=a%0Ab"), "{text}");
+        let back = read_labels_from(Path::new("parts.txt"), text.as_bytes()).unwrap();
+        assert_eq!(back.names, names);
+        assert_eq!(back.labels, labels.labels);
+        // A hand-written `%` that is no escape stays.
+        assert_eq!(unescape_name("100%"), "100%");
+        assert_eq!(unescape_name("%zz%4"), "%zz%4");
+    }
 }

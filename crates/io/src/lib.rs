@@ -9,6 +9,7 @@
 pub mod artifact;
 pub mod atomic;
 pub mod codec;
+pub mod confine;
 pub mod dir;
 pub mod error;
 pub mod file;
