@@ -621,7 +621,8 @@ fn simplify_rig<'py>(
         rig.parts_config().map_err(errors::input)?;
         rig.weight_options().map_err(errors::input)?;
         let (params, stage3) = stage_params(method, fit, saliency, simplify)?;
-        // MERGE: desal_io::confine::write_target(&out) here, once main has it.
+        // Refused now, not after the simplification: an output that is a folder or a FIFO.
+        desal_io::confine::write_target(&out).map_err(errors::io)?;
         let s = detached(py, progress, |p| {
             // The rig's own reader does not yet refuse a FIFO (which would hang) or a
             // device (read until memory runs out); read_regular_file does, reading the
@@ -724,9 +725,8 @@ fn run<'py>(
             })
             .transpose()?;
         let reports = py.detach(|| {
-            // The pipeline file is the caller's input: anything wrong with it is an
-            // InputError. A FIFO or device is refused before the driver opens it.
-            desal_io::file::read_regular_file(&pipeline).map_err(|e| errors::input(e.into()))?;
+            // The pipeline file is the caller's input: anything wrong with it (a FIFO or
+            // a device included, which the driver refuses) is an InputError.
             let pipeline = desal::pipeline::load(&pipeline, out.as_deref()).map_err(errors::input)?;
             let options = desal::run::RunOptions {
                 out,
@@ -761,12 +761,8 @@ fn load<'py>(py: Python<'py>, path: &Bound<'py, PyAny>) -> PyResult<Bound<'py, P
 fn read_hierarchy_npz<'py>(py: Python<'py>, path: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyDict>> {
     guard("load_hierarchy", || {
         let path = args::path("path", path)?;
-        let arrays = py.detach(|| {
-            let bytes = desal_io::file::read_regular_file(&path).map_err(|e| errors::input(e.into()))?;
-            let layout = |reason: String| InputError::new_err(format!("{}: {reason}", path.display()));
-            let arrays = desal_io::npz::decode_npz(&bytes).map_err(layout)?;
-            desal_io::npz::HierarchyArrays::from_arrays(&arrays).map_err(layout)
-        })?;
+        let arrays =
+            py.detach(|| desal_io::npz::read_hierarchy_npz(&path)).map_err(|e| errors::input(e.into()))?;
         artifacts::hierarchy_dict(py, &arrays)
     })
 }

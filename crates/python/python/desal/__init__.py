@@ -125,17 +125,19 @@ def _flag(argument: str, value: Any) -> bool:
 
 def _simplify_table(
     options: Any,
-    placement: str,
+    placement: Optional[str],
     target_vertices: Optional[int],
     target_faces: Optional[int],
     ratio: Optional[float],
 ) -> str:
     """A pipeline file's ``[dataset.simplify]`` table as JSON: ``options`` with the
-    placement and whichever target is given."""
+    placement (when given: unset, the table's default or the method's own) and whichever
+    target is given."""
     table = _options_dict("simplify", "simplify_options", options)
     targets = dict(target_vertices=target_vertices, target_faces=target_faces, ratio=ratio)
     table.update({k: v for k, v in targets.items() if v is not None})
-    table["placement"] = placement
+    if placement is not None:
+        table["placement"] = placement
     return _table("simplify", table)
 
 
@@ -264,7 +266,7 @@ def simplify_pose_set(
     labels: Any = None,
     target_vertices: Optional[int] = None,
     method: str = "paper",
-    placement: str = "optimal",
+    placement: Optional[str] = None,
     template: int = 0,
     target_faces: Optional[int] = None,
     ratio: Optional[float] = None,
@@ -279,15 +281,16 @@ def simplify_pose_set(
     ``labels`` (V,) (None: parts discovered from the poses). ``method`` is ``"paper"``
     (saliency and balance), ``"qslim"``, ``"saliency"``, ``"balance"``,
     ``"multipose"`` (multi-pose QEM, subset placement), ``"desal"`` (desal's own
-    stage 3: the per-area quadric error, subset placement, no saliency; ``placement``
-    is ignored; docs/eval/desal-method.md) or ``"desal-refit"`` (desal's whole method,
+    stage 3: the per-area quadric error, subset placement, no saliency;
+    docs/eval/desal-method.md) or ``"desal-refit"`` (desal's whole method,
     the lowest deformation error on SCAPE: ``"desal"``, then again weighted where its
     mesh deforms worse than the full one under a SCAPE pose model fitted on these poses,
     keeping the vertices the model places best, then edges flipped to follow the poses;
     the mesh ``desal eval`` gives as ``desal-refit``; seconds, not milliseconds).
-    ``saliency_options`` and
-    ``simplify_options`` take the keys of a pipeline file's ``[dataset.saliency]`` and
-    ``[dataset.simplify]`` tables.
+    ``placement`` is ``"optimal"`` or ``"subset"``; unset, it is ``"optimal"``, or the
+    method's own for ``"desal"`` and ``"desal-refit"`` (which refuse another, as a
+    pipeline file does). ``saliency_options`` and ``simplify_options`` take the keys of a
+    pipeline file's ``[dataset.saliency]`` and ``[dataset.simplify]`` tables.
     """
     ps = _pose_set(poses, faces, labels, template, progress)
     simplify_table = _simplify_table(simplify_options, placement, target_vertices, target_faces, ratio)
@@ -416,7 +419,7 @@ def hierarchy(
     ridge: Optional[float] = None,
     neighbourhood: Optional[str] = None,
     method: str = "paper",
-    placement: str = "optimal",
+    placement: Optional[str] = None,
     template: int = 0,
     simplify_options: Optional[dict] = None,
     progress: Progress = None,
