@@ -6,10 +6,19 @@ use std::path::PathBuf;
 /// Why a rig could not be read, posed or written.
 #[derive(Debug, thiserror::Error)]
 pub enum RigError {
-    #[error("{path}: cannot read: {cause}")]
-    Io { path: PathBuf, cause: std::io::Error },
+    /// The rig file or a buffer it names could not be read: not a regular file, a buffer
+    /// URI outside the rig's folder, or an OS error (the message names the path).
+    #[error(transparent)]
+    File(#[from] desal_io::IoError),
     #[error("{path}: not a valid glTF 2.0 file: {cause}")]
     Gltf { path: PathBuf, cause: gltf::Error },
+    /// The `gltf` crate panicked on the file: a gap in desal's checks; report it.
+    #[error("{path}: the glTF reader failed on this file ({message}); please report it with the file")]
+    Panic { path: PathBuf, message: String },
+    /// An accessor breaks the glTF 2.0 specification for what reads it (type, component
+    /// type, layout within its buffer view, sparse indices).
+    #[error("{path}: accessor {accessor} ({semantic} of {used_by}): {reason}")]
+    Accessor { path: PathBuf, accessor: usize, semantic: String, used_by: String, reason: String },
     #[error("{path}: buffer {buffer}: {reason}")]
     Buffer { path: PathBuf, buffer: usize, reason: String },
     #[error("{path}: no skinned mesh (no node has both a mesh and a skin); desal needs a rigged body")]
@@ -46,8 +55,16 @@ pub enum RigError {
     Skin { path: PathBuf, skin: String, reason: String },
     #[error("{path}: animation '{animation}' channel {channel}: {reason}")]
     Animation { path: PathBuf, animation: String, channel: usize, reason: String },
-    #[error("{path}: node {node}: {reason}")]
-    Node { path: PathBuf, node: usize, reason: String },
+    /// `label` is `node 3 'hip'` (or `node 3` when unnamed).
+    #[error("{path}: {label}: {reason}")]
+    Node { path: PathBuf, node: usize, label: String, reason: String },
+    /// A sampled frame that cannot be posed: a joint that moves vertices collapses or
+    /// overflows there; the reason names the joint, the node and the animation.
+    #[error("{path}: pose '{pose}': {reason}")]
+    Pose { path: PathBuf, pose: String, reason: String },
+    /// A posed position beyond `f32` (the caller adds the file).
+    #[error("pose '{pose}': welded vertex {vertex} {reason}")]
+    Posed { pose: String, vertex: usize, reason: String },
     #[error(
         "{path}: poses = \"animations\" asks for frames of the file's animations, but it has none; use poses = \"random\""
     )]

@@ -6,12 +6,14 @@
 //! turns the simplified mesh back into a rig that an engine loads:
 //!
 //! 1. [`read_rig`]: the node tree, the one skinned mesh (with UVs and normals), its skin
-//!    and the animations, through the `gltf` crate; bad input refused with the file and
-//!    the element ([`RigError`]).
+//!    and the animations; the JSON parsed and validated by the `gltf` crate, every
+//!    accessor checked against the glTF 2.0 specification and read by desal; bad or
+//!    hostile input refused with the file and the element ([`RigError`]).
 //! 2. [`Weld`]: split vertices of UV and normal seams welded by position and weights.
 //! 3. [`sample_frames`] and [`pose_rig`]: frames of the animations and/or seeded random
 //!    joint rotations, posed by LBS into a [`PoseSet`] over the welded vertices; the bind
-//!    pose is the template (pose 0).
+//!    pose is the template (pose 0). Their size is capped ([`MAX_FRAMES`],
+//!    [`MAX_POSE_NODES`], [`MAX_POSE_VERTICES`]) before anything is allocated.
 //! 4. [`dominant_joint_parts`]: labels from each vertex's heaviest joint.
 //! 5. [`simplified_rig`] then [`write_glb`]: the same skeleton, inverse bind matrices and
 //!    animations with the simplified mesh, seams kept, weights exact (subset placement)
@@ -22,6 +24,8 @@
 //! one exception to "`desal-io` knows every format", because the `gltf` crate is the
 //! whole reader and the writer's layout is tied to the rig model here.
 
+mod accessor;
+mod document;
 pub mod error;
 pub mod model;
 pub mod parts;
@@ -42,7 +46,10 @@ pub use model::{
     Animation, Channel, Influences, Interpolation, LocalTransform, Node, Rig, Skin, SkinnedMesh,
 };
 pub use parts::{PartsConfig, dominant_joint_parts};
-pub use pose::{Frame, FrameConfig, PoseSource, joint_matrices, sample_frames, skin_points};
+pub use pose::{
+    Frame, FrameConfig, MAX_FRAMES, MAX_POSE_NODES, MAX_POSE_VERTICES, PoseSource, joint_matrices,
+    sample_frames, skin_points,
+};
 pub use read::{ReadOptions, read_rig, read_rig_from};
 pub use seams::seam_edges;
 pub use simplified::{
@@ -71,7 +78,11 @@ pub struct PosedRig {
     pub joints: Vec<Vec<Mat4>>,
 }
 
-/// Poses the welded mesh of `rig` at `frames` by linear blend skinning.
+/// Poses the welded mesh of `rig` at `frames` by linear blend skinning. Refused: more
+/// than [`MAX_POSE_VERTICES`] positions (before any is computed), and a posed position
+/// that is not a finite `f32` ([`RigError::Posed`], naming the pose and welded vertex;
+/// the caller adds the file). [`sample_frames`] has already refused frames whose joints
+/// collapse or overflow.
 pub fn pose_rig(rig: &Rig, frames: &[Frame]) -> Result<PosedRig, RigError> {
     let weld = Weld::new(&rig.mesh);
     let representatives = weld.representatives();
@@ -86,6 +97,16 @@ pub fn pose_rig(rig: &Rig, frames: &[Frame]) -> Result<PosedRig, RigError> {
             Vec3::new(p[0].into(), p[1].into(), p[2].into())
         })
         .collect();
+    let positions_held = (frames.len() + 1).saturating_mul(rest.len());
+    if positions_held > pose::MAX_POSE_VERTICES {
+        return Err(RigError::Settings(format!(
+            "{} poses of {} welded vertices are {positions_held} positions, more than desal's limit of {} \
+             (desal_rig::MAX_POSE_VERTICES); lower frames",
+            frames.len() + 1,
+            rest.len(),
+            pose::MAX_POSE_VERTICES
+        )));
+    }
     let mut names = vec![BIND_POSE.to_owned()];
     let mut positions = vec![rest.clone()];
     let mut joints = vec![vec![Mat4::identity(); rig.skin.joints.len()]];
@@ -95,8 +116,22 @@ pub fn pose_rig(rig: &Rig, frames: &[Frame]) -> Result<PosedRig, RigError> {
         names.push(frame.name.clone());
         joints.push(m);
     }
-    if let Some(k) = positions.iter().position(|p| !p.iter().all(|q| q.iter().all(|c| c.is_finite()))) {
-        return Err(RigError::Settings(format!("pose '{}' has non-finite positions", names[k])));
+    // The pose set is stored in f32: a position beyond its range would become infinite.
+    let in_range = |q: &Vec3| q.iter().all(|c| c.is_finite() && c.abs() <= f64::from(f32::MAX));
+    for (k, pose) in positions.iter().enumerate() {
+        if let Some(v) = pose.iter().position(|q| !in_range(q)) {
+            let j = influences.dominant_joint(v);
+            return Err(RigError::Posed {
+                pose: names[k].clone(),
+                vertex: v,
+                reason: format!(
+                    "lands at {:?}, beyond the range of f32 in which desal stores poses; its heaviest joint is \
+                     joint {j} ({}): check the translations and scales above it",
+                    pose[v].as_slice(),
+                    pose::node_label(rig, rig.skin.joints[j])
+                ),
+            });
+        }
     }
     let poses = PoseSet::try_new(names, positions, weld.faces.clone(), 0)
         .map_err(|e| RigError::Settings(format!("the posed rig is not a valid pose set: {e}")))?;

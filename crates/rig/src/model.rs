@@ -206,6 +206,29 @@ impl Rig {
         parents
     }
 
+    /// Every node once, each after its parent: the order in which a walk down the tree
+    /// meets them, found without recursion (a file's node chain may be thousands deep)
+    /// in time linear in the nodes. `parents` is [`Rig::parents`], which must be acyclic
+    /// (as [`crate::read_rig`] checks).
+    pub fn parents_first(parents: &[Option<usize>]) -> Vec<usize> {
+        let mut placed = vec![false; parents.len()];
+        let mut order = Vec::with_capacity(parents.len());
+        let mut chain = Vec::new();
+        for start in 0..parents.len() {
+            // Climb to the nearest placed ancestor (or a root), then place the chain top-down.
+            let mut current = Some(start);
+            while let Some(n) = current.filter(|&n| !placed[n]) {
+                chain.push(n);
+                current = parents[n];
+            }
+            while let Some(n) = chain.pop() {
+                placed[n] = true;
+                order.push(n);
+            }
+        }
+        order
+    }
+
     /// The parent *joint* of every joint: the nearest ancestor node that is a joint.
     pub fn joint_parents(&self) -> Vec<Option<usize>> {
         let parents = self.parents();
@@ -213,20 +236,12 @@ impl Rig {
         for (j, &n) in self.skin.joints.iter().enumerate() {
             joint_of_node[n] = Some(j);
         }
-        self.skin
-            .joints
-            .iter()
-            .map(|&n| {
-                let mut current = parents[n];
-                while let Some(p) = current {
-                    if let Some(j) = joint_of_node[p] {
-                        return Some(j);
-                    }
-                    current = parents[p];
-                }
-                None
-            })
-            .collect()
+        // The nearest joint at or above every node, parents first.
+        let mut nearest: Vec<Option<usize>> = vec![None; self.nodes.len()];
+        for n in Self::parents_first(&parents) {
+            nearest[n] = joint_of_node[n].or_else(|| parents[n].and_then(|p| nearest[p]));
+        }
+        self.skin.joints.iter().map(|&n| parents[n].and_then(|p| nearest[p])).collect()
     }
 
     /// A joint's name: its node's name, or `joint<j>`.

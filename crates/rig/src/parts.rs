@@ -31,17 +31,14 @@ pub fn dominant_joint_parts(rig: &Rig, influences: &Influences, config: &PartsCo
     for &j in &dominant {
         count[j] += 1;
     }
-    // Children before parents: deepest joints first.
-    let depth = |mut j: usize| {
-        let mut d = 0;
-        while let Some(p) = parents[j] {
-            d += 1;
-            j = p;
-        }
-        d
-    };
+    // Children before parents: deepest joints first (depths found parents first, in
+    // linear time, since a joint chain may be thousands deep).
+    let mut depth = vec![0usize; joint_count];
+    for j in Rig::parents_first(&parents) {
+        depth[j] = parents[j].map_or(0, |p| depth[p] + 1);
+    }
     let mut order: Vec<usize> = (0..joint_count).collect();
-    order.sort_by_key(|&j| (std::cmp::Reverse(depth(j)), j));
+    order.sort_by_key(|&j| (std::cmp::Reverse(depth[j]), j));
     for &j in &order {
         if count[j] > 0
             && count[j] < config.min_part_vertices

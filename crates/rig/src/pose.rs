@@ -131,34 +131,42 @@ pub fn sample_channel(channel: &Channel, time: f64) -> Vec<f64> {
     out
 }
 
-/// World matrices of every node for the local poses `locals`.
+/// World matrices of every node for the local poses `locals`: `W_n = W_parent · L_n`,
+/// computed parents first without recursion, so a chain of any depth fits the stack.
 pub fn world_matrices(rig: &Rig, locals: &[LocalPose]) -> Vec<Mat4> {
     let parents = rig.parents();
-    let mut world: Vec<Option<Mat4>> = vec![None; rig.nodes.len()];
-    fn resolve(
-        n: usize,
-        parents: &[Option<usize>],
-        locals: &[LocalPose],
-        world: &mut [Option<Mat4>],
-    ) -> Mat4 {
-        if let Some(m) = world[n] {
-            return m;
-        }
+    let mut world = vec![Mat4::identity(); rig.nodes.len()];
+    for n in Rig::parents_first(&parents) {
         let local = locals[n].matrix();
-        let m = match parents[n] {
-            Some(p) => resolve(p, parents, locals, world) * local,
+        world[n] = match parents[n] {
+            Some(p) => world[p] * local,
             None => local,
         };
-        world[n] = Some(m);
-        m
     }
-    (0..rig.nodes.len()).map(|n| resolve(n, &parents, locals, &mut world)).collect()
+    world
 }
 
 /// The skinning matrix `G_j · B_j` of every joint for the local poses `locals`.
 pub fn joint_matrices(rig: &Rig, locals: &[LocalPose]) -> Vec<Mat4> {
-    let world = world_matrices(rig, locals);
+    skinning_matrices(rig, &world_matrices(rig, locals))
+}
+
+fn skinning_matrices(rig: &Rig, world: &[Mat4]) -> Vec<Mat4> {
     rig.skin.joints.iter().enumerate().map(|(j, &n)| world[n] * rig.skin.inverse_bind_matrix(j)).collect()
+}
+
+/// How flat a 3×3 linear part may be before it counts as singular: its determinant
+/// over the product of its column lengths (1 for orthogonal columns, 0 for a zero
+/// scale). `f32` rounding of a truly singular matrix leaves about 1e-7.
+pub const SINGULAR_VOLUME_RATIO: f64 = 1e-6;
+
+/// Whether the linear (upper-left 3×3) part of `m` collapses space onto a plane, a line
+/// or a point ([`SINGULAR_VOLUME_RATIO`]); scale-invariant, so tiny or huge but
+/// well-shaped matrices are not singular.
+pub fn is_singular(m: &Mat4) -> bool {
+    let a = m.fixed_view::<3, 3>(0, 0);
+    let lengths = a.column(0).norm() * a.column(1).norm() * a.column(2).norm();
+    lengths == 0.0 || a.determinant().abs() <= SINGULAR_VOLUME_RATIO * lengths
 }
 
 /// Linear blend skinning of `rest` (one row of `influences` per point) with the joint
@@ -196,6 +204,20 @@ pub enum PoseSource {
     /// `frames` of each.
     Both,
 }
+
+/// Most frames [`sample_frames`] makes of one source (`frames` in [`FrameConfig`]).
+/// Each frame holds a local pose per node and becomes a pose of the pose set; 65 536 is
+/// far above any pose set desal simplifies (the SCAPE set has 71 poses).
+pub const MAX_FRAMES: usize = 1 << 16;
+
+/// Most vertex positions a posed rig may hold: poses (the bind pose included) × welded
+/// vertices, refused by [`crate::pose_rig`] before anything is allocated. 2^27 positions
+/// are 3 GiB as `f64`, and every later stage holds the pose set again.
+pub const MAX_POSE_VERTICES: usize = 1 << 27;
+
+/// Most node local poses the sampled frames may hold: frames × nodes, refused by
+/// [`sample_frames`] before sampling. 2^23 local poses are about 1.1 GiB.
+pub const MAX_POSE_NODES: usize = 1 << 23;
 
 /// How [`sample_frames`] picks the frames.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -238,6 +260,22 @@ pub fn sample_frames(
     if !(config.max_degrees.is_finite() && (0.0..=180.0).contains(&config.max_degrees)) {
         return Err(RigError::Settings(format!("max_degrees {} must lie in 0..=180", config.max_degrees)));
     }
+    if config.frames > MAX_FRAMES {
+        return Err(RigError::Settings(format!(
+            "frames = {} is more than desal's limit of {MAX_FRAMES} (desal_rig::MAX_FRAMES)",
+            config.frames
+        )));
+    }
+    let sources = if config.source == PoseSource::Both { 2 } else { 1 };
+    let local_poses = (config.frames * sources).saturating_mul(rig.nodes.len());
+    if local_poses > MAX_POSE_NODES {
+        return Err(RigError::Settings(format!(
+            "{} frames of a rig with {} nodes are {local_poses} node poses, more than desal's limit of \
+             {MAX_POSE_NODES} (desal_rig::MAX_POSE_NODES); lower frames",
+            config.frames * sources,
+            rig.nodes.len()
+        )));
+    }
     let mut frames = Vec::new();
     if matches!(config.source, PoseSource::Animations | PoseSource::Both) {
         frames.extend(animation_frames(rig, config.frames, path)?);
@@ -245,7 +283,105 @@ pub fn sample_frames(
     if matches!(config.source, PoseSource::Random | PoseSource::Both) {
         frames.extend(random_frames(rig, config.frames, config.seed, config.max_degrees));
     }
+    check_frames(rig, &frames, path)?;
     Ok(frames)
+}
+
+/// Refuses a frame in which a joint that moves vertices has a skinning matrix that is
+/// not finite (a transform chain that overflows) or singular (a zero scale, which glTF
+/// allows — engines use it to hide things — but which crushes the vertices the joint
+/// moves, while desal fits parts that keep their shape). The error names the frame, the
+/// joint and the node whose transform does it, and the animation channel that sets it.
+fn check_frames(rig: &Rig, frames: &[Frame], path: &std::path::Path) -> Result<(), RigError> {
+    let mut moved = vec![0usize; rig.skin.joints.len()];
+    for (&j, &w) in rig.mesh.influences.joints.iter().zip(&rig.mesh.influences.weights) {
+        if w > 0.0 {
+            moved[usize::from(j)] += 1;
+        }
+    }
+    let parents = rig.parents();
+    for frame in frames {
+        let world = world_matrices(rig, &frame.locals);
+        let skinning = skinning_matrices(rig, &world);
+        let Some((j, m)) = skinning
+            .iter()
+            .enumerate()
+            .find(|&(j, m)| moved[j] > 0 && (!m.iter().all(|x| x.is_finite()) || is_singular(m)))
+        else {
+            continue;
+        };
+        let joint_node = rig.skin.joints[j];
+        // The joint's node and its ancestors, root first.
+        let mut chain = vec![joint_node];
+        while let Some(p) = parents[*chain.last().expect("non-empty")] {
+            chain.push(p);
+        }
+        chain.reverse();
+        let joint = format!("joint {j} ({}) moves {} vertices", node_label(rig, joint_node), moved[j]);
+        let reason = if !m.iter().all(|x| x.is_finite()) {
+            let culprit = chain.iter().copied().find(|&n| !world[n].iter().all(|x| x.is_finite()));
+            match culprit {
+                Some(n) => format!(
+                    "{joint}, but the transform of {} ({}) overflows to a non-finite world matrix here",
+                    node_label(rig, n),
+                    describe_local(&frame.locals[n])
+                ),
+                None => format!("{joint}, but its skinning matrix is not finite here"),
+            }
+        } else {
+            match chain.iter().copied().find(|&n| is_singular(&frame.locals[n].matrix())) {
+                Some(n) => format!(
+                    "{joint}, but {} has {} here, which collapses them (a zero scale is valid glTF, used \
+                     to hide things, but desal fits body parts that keep their shape){}",
+                    node_label(rig, n),
+                    describe_local(&frame.locals[n]),
+                    scale_channels(rig, n)
+                ),
+                None => format!("{joint}, but its skinning matrix is singular here"),
+            }
+        };
+        return Err(RigError::Pose { path: path.to_owned(), pose: frame.name.clone(), reason });
+    }
+    Ok(())
+}
+
+/// `node 3 'hip'` (or `node 3` when unnamed).
+pub fn node_label(rig: &Rig, node: usize) -> String {
+    match &rig.nodes[node].name {
+        Some(name) => format!("node {node} '{name}'"),
+        None => format!("node {node}"),
+    }
+}
+
+/// A local pose for messages: its translation and scale, or "a matrix".
+fn describe_local(local: &LocalPose) -> String {
+    match local {
+        LocalPose::Trs { translation: t, scale: s, .. } => {
+            format!("translation [{}, {}, {}], scale [{}, {}, {}]", t.x, t.y, t.z, s.x, s.y, s.z)
+        }
+        LocalPose::Matrix(_) => "a fixed matrix".into(),
+    }
+}
+
+/// "; animation 'a' scales it (keyframe k: [0, 0, 0])", for the first animation that
+/// scales `node`, or nothing.
+fn scale_channels(rig: &Rig, node: usize) -> String {
+    for (a, animation) in rig.animations.iter().enumerate() {
+        for channel in &animation.channels {
+            if channel.node != node || channel.path != Path::Scale {
+                continue;
+            }
+            let name = animation.name.clone().unwrap_or_else(|| format!("animation {a}"));
+            let cubic = channel.interpolation == Interpolation::CubicSpline;
+            let (stride, first) = if cubic { (9, 3) } else { (3, 0) };
+            let key = (0..channel.times.len())
+                .find(|k| channel.values[k * stride + first..k * stride + first + 3].contains(&0.0));
+            let key =
+                key.map(|k| format!(" (keyframe {k}: {:?})", &channel.values[k * stride + first..][..3]));
+            return format!("; animation '{name}' scales it{}", key.unwrap_or_default());
+        }
+    }
+    String::new()
 }
 
 fn animation_frames(rig: &Rig, count: usize, path: &std::path::Path) -> Result<Vec<Frame>, RigError> {

@@ -1,22 +1,27 @@
-//! Reading a skinned glTF 2.0 file (`.glb` or `.gltf` with its buffers) into a [`Rig`],
-//! through the `gltf` crate, which parses and validates the JSON (every index in range)
-//! and reads accessors of any component type, stride and normalisation.
+//! Reading a skinned glTF 2.0 file (`.glb` or `.gltf` with its buffers) into a [`Rig`].
+//! The `gltf` crate parses and validates the JSON (every index in range,
+//! [`crate::document`]); desal reads every accessor itself ([`crate::accessor`]), each
+//! checked against the specification's table and its buffer before it is read, so a
+//! hostile file is refused by name and never panics, allocates at will or is misread.
 //!
 //! What is read: the node tree and scenes; the one skinned mesh (the mesh of a node that
 //! has a skin; when there are several, [`ReadOptions::mesh`] picks one by mesh or node
 //! name) with `POSITION`, `NORMAL`, `TEXCOORD_0` and every `JOINTS_n`/`WEIGHTS_n` set, its
 //! triangle primitives concatenated; its skin; the animations' translation, rotation and
-//! scale channels. What is refused, with the file and the element: no skin, an ambiguous
-//! skinned mesh, morph targets, weights that do not sum to 1, weights on joints the skin
-//! does not have, non-triangle primitives, non-finite values. Other meshes, materials,
-//! cameras and extensions are not read (and so not written back).
+//! scale channels. Buffers come from the GLB binary chunk, base64 `data:` URIs, or
+//! regular files inside the glTF's own folder ([`desal_io::confine`]). What is refused,
+//! with the file and the element: no skin, an ambiguous skinned mesh, morph targets,
+//! weights that do not sum to 1, weights on joints the skin does not have, non-triangle
+//! primitives, non-finite values, zero-length rotations, singular inverse bind matrices,
+//! accessors that break the specification. Other meshes, materials, cameras and
+//! extensions are not read (and so not written back).
 
 use std::path::{Path, PathBuf};
 
 use gltf::Document;
-use gltf::animation::util::ReadOutputs;
 
 use crate::RigError;
+use crate::accessor::{Accessors, Semantic};
 use crate::model::{
     Animation, Channel, Influences, Interpolation, LocalTransform, Node, Path as ChannelPath, Rig, Skin,
     SkinnedMesh,
@@ -27,6 +32,17 @@ use crate::model::{
 /// weights that were never normalised.
 pub const WEIGHT_SUM_TOLERANCE: f64 = 1e-3;
 
+/// The shortest rotation quaternion accepted (in a node or a keyframe). glTF requires
+/// unit quaternions; ones off by rounding are normalised when posed, as engines do, but
+/// one this short has no direction to normalise to.
+pub const MIN_ROTATION_LENGTH: f64 = 1e-6;
+
+/// The largest external buffer file read (glTF's GLB container counts bytes in `u32`).
+pub const MAX_BUFFER_BYTES: u64 = 1 << 32;
+
+/// The `KHR_mesh_quantization` extension: integer positions, normals and UVs.
+const MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
+
 /// Options of [`read_rig`].
 #[derive(Debug, Clone, Default)]
 pub struct ReadOptions {
@@ -35,32 +51,58 @@ pub struct ReadOptions {
 }
 
 /// Reads the rig in `path` (`.glb`, or `.gltf` whose buffers are beside it or embedded).
+/// A directory, FIFO or device is refused before it is opened.
 pub fn read_rig(path: &Path, options: &ReadOptions) -> Result<Rig, RigError> {
-    let bytes = std::fs::read(path).map_err(|cause| RigError::Io { path: path.to_owned(), cause })?;
+    let bytes = desal_io::file::read_regular_file(path)?;
     read_rig_from(path, &bytes, options)
 }
 
 /// Reads a rig from `bytes`; `path` names it in errors and locates external buffers.
 pub fn read_rig_from(path: &Path, bytes: &[u8], options: &ReadOptions) -> Result<Rig, RigError> {
-    let gltf =
-        gltf::Gltf::from_slice(bytes).map_err(|cause| RigError::Gltf { path: path.to_owned(), cause })?;
-    let buffers = load_buffers(path, &gltf.document, gltf.blob.as_deref())?;
-    let reader = Reader { path: path.to_owned(), document: &gltf.document, buffers };
+    // The one place desal calls into the `gltf` crate: should it panic on a file the
+    // checks let through, the caller gets an error naming the file, not an abort (and
+    // Python no `PanicException`).
+    without_panics(path, || read_checked(path, bytes, options))
+}
+
+/// `read()`, with a panic turned into [`RigError::Panic`] naming `path`.
+fn without_panics<T>(path: &Path, read: impl FnOnce() -> Result<T, RigError>) -> Result<T, RigError> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(read)).unwrap_or_else(|panic| {
+        let message = panic
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_owned())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".into());
+        Err(RigError::Panic { path: path.to_owned(), message })
+    })
+}
+
+fn read_checked(path: &Path, bytes: &[u8], options: &ReadOptions) -> Result<Rig, RigError> {
+    let parsed = crate::document::parse(path, bytes)?;
+    let buffers = load_buffers(path, &parsed.document, parsed.blob.as_deref())?;
+    let real_size = buffers.iter().fold(bytes.len(), |sum, b| sum.saturating_add(b.len()));
+    let accessors = Accessors {
+        path,
+        buffers: &buffers,
+        quantized: parsed.extensions.iter().any(|e| e == MESH_QUANTIZATION),
+        real_size,
+    };
+    let reader = Reader { path: path.to_owned(), document: &parsed.document, accessors };
     reader.read(options)
 }
 
 struct Reader<'a> {
     path: PathBuf,
     document: &'a Document,
-    buffers: Vec<Vec<u8>>,
+    accessors: Accessors<'a>,
 }
 
 impl Reader<'_> {
     fn read(&self, options: &ReadOptions) -> Result<Rig, RigError> {
         let (mesh_node, mesh, skin) = self.pick_skinned_mesh(options)?;
-        let skin = self.read_skin(&skin)?;
+        let nodes = self.document.nodes().map(|n| self.read_node(&n)).collect::<Result<Vec<_>, _>>()?;
+        let skin = self.read_skin(&skin, &nodes)?;
         let mesh = self.read_mesh(&mesh, &skin)?;
-        let nodes = self.document.nodes().map(|n| self.read_node(&n)).collect();
         let scenes = self.document.scenes().map(|s| s.nodes().map(|n| n.index()).collect()).collect();
         let scene = self.document.default_scene().map(|s| s.index());
         let animations =
@@ -106,29 +148,22 @@ impl Reader<'_> {
         Ok((node.index(), mesh, skin))
     }
 
-    /// The bytes of a buffer, for the `gltf` crate's accessor readers.
-    fn data<'s>(&'s self) -> impl Clone + Fn(gltf::Buffer<'_>) -> Option<&'s [u8]> {
-        let buffers: &'s [Vec<u8>] = &self.buffers;
-        move |b: gltf::Buffer<'_>| buffers.get(b.index()).map(Vec::as_slice)
-    }
-
-    fn read_skin(&self, skin: &gltf::Skin<'_>) -> Result<Skin, RigError> {
+    fn read_skin(&self, skin: &gltf::Skin<'_>, nodes: &[Node]) -> Result<Skin, RigError> {
         let name = skin.name().map(str::to_owned);
         let joints: Vec<usize> = skin.joints().map(|n| n.index()).collect();
-        let skin_error = |reason: String| RigError::Skin {
-            path: self.path.clone(),
-            skin: name.clone().unwrap_or_else(|| format!("skin {}", skin.index())),
-            reason,
-        };
+        let label = name.clone().unwrap_or_else(|| format!("skin {}", skin.index()));
+        let skin_error =
+            |reason: String| RigError::Skin { path: self.path.clone(), skin: label.clone(), reason };
         if joints.is_empty() || joints.len() > usize::from(u16::MAX) {
             return Err(skin_error(format!("has {} joints; a skin needs 1 to 65535", joints.len())));
         }
-        let inverse_bind: Vec<[f32; 16]> = match skin.reader(self.data()).read_inverse_bind_matrices() {
-            None if skin.inverse_bind_matrices().is_some() => {
-                return Err(skin_error("inverseBindMatrices lie outside their buffer".into()));
-            }
+        let inverse_bind: Vec<[f32; 16]> = match skin.inverse_bind_matrices() {
             None => vec![identity_matrix(); joints.len()],
-            Some(iter) => iter.map(flatten_matrix).collect(),
+            Some(accessor) => {
+                let used_by = format!("skin '{label}'");
+                let values = self.accessors.floats(&accessor, Semantic::InverseBindMatrices, &used_by)?;
+                values.chunks_exact(16).map(|m| m.try_into().expect("16 values")).collect()
+            }
         };
         if inverse_bind.len() != joints.len() {
             return Err(skin_error(format!(
@@ -137,8 +172,27 @@ impl Reader<'_> {
                 inverse_bind.len()
             )));
         }
-        if let Some(j) = inverse_bind.iter().position(|m| !m.iter().all(|x| x.is_finite())) {
-            return Err(skin_error(format!("inverse bind matrix {j} is not finite")));
+        let joint_label = |j: usize| {
+            let n = joints[j];
+            match &nodes[n].name {
+                Some(node) => format!("joint {j} (node {n} '{node}')"),
+                None => format!("joint {j} (node {n})"),
+            }
+        };
+        for (j, m) in inverse_bind.iter().enumerate() {
+            if !m.iter().all(|x| x.is_finite()) {
+                return Err(skin_error(format!(
+                    "the inverse bind matrix of {} is not finite",
+                    joint_label(j)
+                )));
+            }
+            if crate::pose::is_singular(&nalgebra::Matrix4::from_column_slice(&m.map(f64::from))) {
+                return Err(skin_error(format!(
+                    "the inverse bind matrix of {} is singular ({m:?}); it must invert the joint's bind \
+                     transform, which a singular matrix cannot",
+                    joint_label(j)
+                )));
+            }
         }
         Ok(Skin { name, joints, inverse_bind, skeleton: skin.skeleton().map(|n| n.index()) })
     }
@@ -173,11 +227,12 @@ impl Reader<'_> {
             if primitive.mode() != gltf::mesh::Mode::Triangles {
                 return Err(bad(&format!("mode {:?}: only triangle lists are supported", primitive.mode())));
             }
-            let reader = primitive.reader(self.data());
-            let positions: Vec<[f32; 3]> = reader
-                .read_positions()
-                .ok_or_else(|| bad("has no POSITION (or it lies outside its buffer)"))?
-                .collect();
+            let used_by = format!("mesh '{name}' primitive {p}");
+            let floats = |accessor: &gltf::Accessor<'_>, semantic: Semantic| {
+                self.accessors.floats(accessor, semantic, &used_by)
+            };
+            let position = primitive.get(&gltf::Semantic::Positions).ok_or_else(|| bad("has no POSITION"))?;
+            let positions: Vec<[f32; 3]> = triples(floats(&position, Semantic::Position)?);
             let base = out.positions.len();
             let count = positions.len();
             if let Some(v) = positions.iter().position(|p| !p.iter().all(|x| x.is_finite())) {
@@ -190,21 +245,31 @@ impl Reader<'_> {
             }
             out.positions.extend(positions);
             // An attribute is kept only when every primitive has it.
-            match (reader.read_normals(), &mut out.normals) {
-                (Some(n), Some(all)) => all.extend(n),
+            match (primitive.get(&gltf::Semantic::Normals), &mut out.normals) {
+                (Some(n), Some(all)) => all.extend(triples(floats(&n, Semantic::Normal)?)),
                 _ => out.normals = None,
             }
-            match (reader.read_tex_coords(0), &mut out.uvs) {
-                (Some(t), Some(all)) => all.extend(t.into_f32()),
+            match (primitive.get(&gltf::Semantic::TexCoords(0)), &mut out.uvs) {
+                (Some(t), Some(all)) => {
+                    all.extend(floats(&t, Semantic::TexCoord(0))?.chunks_exact(2).map(|c| [c[0], c[1]]));
+                }
                 _ => out.uvs = None,
             }
             let mut joints: Vec<Vec<[u16; 4]>> = Vec::new();
             let mut weights: Vec<Vec<[f32; 4]>> = Vec::new();
             for set in 0.. {
-                match (reader.read_joints(set), reader.read_weights(set)) {
+                match (
+                    primitive.get(&gltf::Semantic::Joints(set)),
+                    primitive.get(&gltf::Semantic::Weights(set)),
+                ) {
                     (Some(j), Some(w)) => {
-                        joints.push(j.into_u16().collect());
-                        weights.push(w.into_f32().collect());
+                        let j = self.accessors.integers(&j, Semantic::Joints(set), &used_by)?;
+                        // JOINTS_n are u8 or u16 (checked), so every value fits.
+                        joints.push(
+                            j.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]].map(|x| x as u16)).collect(),
+                        );
+                        let w = floats(&w, Semantic::Weights(set))?;
+                        weights.push(w.chunks_exact(4).map(|c| c.try_into().expect("4 values")).collect());
                     }
                     (None, None) => break,
                     _ => return Err(bad(&format!("JOINTS_{set} and WEIGHTS_{set} must come together"))),
@@ -217,9 +282,8 @@ impl Reader<'_> {
                 return Err(bad("has no JOINTS_0/WEIGHTS_0: the mesh is not skinned"));
             }
             self.read_influences(&joints, &weights, base, &name, skin, &mut out.influences)?;
-            let indices: Vec<u32> = match reader.read_indices() {
-                Some(i) => i.into_u32().collect(),
-                None if primitive.indices().is_some() => return Err(bad("indices lie outside their buffer")),
+            let indices: Vec<u32> = match primitive.indices() {
+                Some(i) => self.accessors.integers(&i, Semantic::Indices, &used_by)?,
                 None => (0..count as u32).collect(),
             };
             if !indices.len().is_multiple_of(3) {
@@ -249,7 +313,6 @@ impl Reader<'_> {
         }
         Ok(out)
     }
-
     /// Checks and appends the influences of one primitive's vertices (`base..`).
     fn read_influences(
         &self,
@@ -306,49 +369,82 @@ impl Reader<'_> {
         Ok(())
     }
 
-    fn read_node(&self, node: &gltf::Node<'_>) -> Node {
+    /// A node, its transform finite and its rotation of non-zero length (a zero scale
+    /// is valid glTF and kept; [`crate::sample_frames`] refuses it where it crushes
+    /// skinned vertices).
+    fn read_node(&self, node: &gltf::Node<'_>) -> Result<Node, RigError> {
+        let name = node.name().map(str::to_owned);
+        let bad = |reason: String| RigError::Node {
+            path: self.path.clone(),
+            node: node.index(),
+            label: match &name {
+                Some(name) => format!("node {} '{name}'", node.index()),
+                None => format!("node {}", node.index()),
+            },
+            reason,
+        };
         let transform = match node.transform() {
             gltf::scene::Transform::Matrix { matrix } => LocalTransform::Matrix(flatten_matrix(matrix)),
             gltf::scene::Transform::Decomposed { translation, rotation, scale } => {
                 LocalTransform::Trs { translation, rotation, scale }
             }
         };
-        Node {
-            name: node.name().map(str::to_owned),
-            children: node.children().map(|c| c.index()).collect(),
-            transform,
+        match &transform {
+            LocalTransform::Matrix(m) if !m.iter().all(|x| x.is_finite()) => {
+                return Err(bad(format!("matrix {m:?} is not finite")));
+            }
+            LocalTransform::Trs { translation, rotation, scale } => {
+                for (what, values) in
+                    [("translation", &translation[..]), ("rotation", rotation), ("scale", scale)]
+                {
+                    if !values.iter().all(|x| x.is_finite()) {
+                        return Err(bad(format!("{what} {values:?} is not finite")));
+                    }
+                }
+                if let Some(reason) = rotation_fault(rotation) {
+                    return Err(bad(reason));
+                }
+            }
+            LocalTransform::Matrix(_) => {}
         }
+        Ok(Node { name, children: node.children().map(|c| c.index()).collect(), transform })
     }
 
     fn read_animation(&self, animation: &gltf::Animation<'_>) -> Result<Animation, RigError> {
         let name = animation.name().map(str::to_owned);
+        let label = name.clone().unwrap_or_else(|| format!("animation {}", animation.index()));
         let mut channels = Vec::new();
         for (c, channel) in animation.channels().enumerate() {
             let bad = |reason: &str| RigError::Animation {
                 path: self.path.clone(),
-                animation: name.clone().unwrap_or_else(|| format!("animation {}", animation.index())),
+                animation: label.clone(),
                 channel: c,
                 reason: reason.to_owned(),
             };
-            let reader = channel.reader(self.data());
-            let times: Vec<f32> =
-                reader.read_inputs().ok_or_else(|| bad("input lies outside its buffer"))?.collect();
-            let (path, values): (ChannelPath, Vec<f32>) =
-                match reader.read_outputs().ok_or_else(|| bad("output lies outside its buffer"))? {
-                    ReadOutputs::Translations(t) => (ChannelPath::Translation, t.flatten().collect()),
-                    ReadOutputs::Rotations(r) => (ChannelPath::Rotation, r.into_f32().flatten().collect()),
-                    ReadOutputs::Scales(s) => (ChannelPath::Scale, s.flatten().collect()),
-                    // Morph target weights: the mesh has no morph targets (they are refused).
-                    ReadOutputs::MorphTargetWeights(_) => continue,
-                };
-            let interpolation = match channel.sampler().interpolation() {
+            let used_by = format!("animation '{label}' channel {c}");
+            let sampler = channel.sampler();
+            let times = self.accessors.floats(&sampler.input(), Semantic::AnimationInput, &used_by)?;
+            let (path, semantic) = match channel.target().property() {
+                gltf::animation::Property::Translation => (ChannelPath::Translation, Semantic::Translation),
+                gltf::animation::Property::Rotation => (ChannelPath::Rotation, Semantic::Rotation),
+                gltf::animation::Property::Scale => (ChannelPath::Scale, Semantic::Scale),
+                // Morph target weights: the mesh has no morph targets (they are refused).
+                gltf::animation::Property::MorphTargetWeights => {
+                    self.accessors.check(&sampler.output(), Semantic::MorphWeights, &used_by)?;
+                    continue;
+                }
+            };
+            let values = self.accessors.floats(&sampler.output(), semantic, &used_by)?;
+            let interpolation = match sampler.interpolation() {
                 gltf::animation::Interpolation::Step => Interpolation::Step,
                 gltf::animation::Interpolation::Linear => Interpolation::Linear,
                 gltf::animation::Interpolation::CubicSpline => Interpolation::CubicSpline,
             };
             let channel =
                 Channel { node: channel.target().node().index(), path, interpolation, times, values };
-            let per_key = channel.width() * if interpolation == Interpolation::CubicSpline { 3 } else { 1 };
+            let cubic = interpolation == Interpolation::CubicSpline;
+            let width = channel.width();
+            let per_key = width * if cubic { 3 } else { 1 };
             if channel.times.is_empty() || channel.values.len() != channel.times.len() * per_key {
                 return Err(bad("needs one output value per keyframe time"));
             }
@@ -356,8 +452,18 @@ impl Reader<'_> {
             {
                 return Err(bad("keyframe times must be finite and strictly increasing"));
             }
-            if !channel.values.iter().all(|x| x.is_finite()) {
-                return Err(bad("has a value that is not finite"));
+            if let Some(i) = channel.values.iter().position(|x| !x.is_finite()) {
+                return Err(bad(&format!("keyframe {} has a value that is not finite", i / per_key)));
+            }
+            if path == ChannelPath::Rotation {
+                // The values, not CUBICSPLINE's tangents (which may well be zero).
+                let value =
+                    |k: usize| &channel.values[k * per_key + if cubic { width } else { 0 }..][..width];
+                for k in 0..channel.times.len() {
+                    if let Some(reason) = rotation_fault(value(k)) {
+                        return Err(bad(&format!("keyframe {k}: {reason}")));
+                    }
+                }
             }
             if matches!(
                 self.document.nodes().nth(channel.node).map(|n| n.transform()),
@@ -371,8 +477,23 @@ impl Reader<'_> {
     }
 }
 
+/// Why a rotation quaternion cannot be used, if it cannot: shorter than
+/// [`MIN_ROTATION_LENGTH`].
+fn rotation_fault(q: &[f32]) -> Option<String> {
+    let length = q.iter().map(|&x| f64::from(x).powi(2)).sum::<f64>().sqrt();
+    (length < MIN_ROTATION_LENGTH).then(|| {
+        format!("rotation {q:?} has length {length}; glTF requires a unit quaternion (e.g. [0, 0, 0, 1])")
+    })
+}
+
 /// Every node has at most one parent and the graph has no cycle.
 fn check_tree(path: &Path, rig: &Rig) -> Result<(), RigError> {
+    let node_error = |node: usize, reason: &str| RigError::Node {
+        path: path.to_owned(),
+        node,
+        label: crate::pose::node_label(rig, node),
+        reason: reason.to_owned(),
+    };
     let mut parent_count = vec![0usize; rig.nodes.len()];
     for node in &rig.nodes {
         for &c in &node.children {
@@ -380,29 +501,43 @@ fn check_tree(path: &Path, rig: &Rig) -> Result<(), RigError> {
         }
     }
     if let Some(n) = parent_count.iter().position(|&c| c > 1) {
-        return Err(RigError::Node {
-            path: path.to_owned(),
-            node: n,
-            reason: "has more than one parent".into(),
-        });
+        return Err(node_error(n, "has more than one parent"));
+    }
+    // Each node's chain of parents must end at a root: walked once per node in index
+    // order (linear time however deep the tree), each walk stopping at a node already
+    // known to end; meeting a node of the walk itself again is a cycle.
+    #[derive(Clone, Copy, PartialEq)]
+    enum Seen {
+        No,
+        OnThisWalk,
+        EndsAtRoot,
     }
     let parents = rig.parents();
+    let mut seen = vec![Seen::No; rig.nodes.len()];
+    let mut walk = Vec::new();
     for start in 0..rig.nodes.len() {
-        let mut current = parents[start];
-        let mut steps = 0;
-        while let Some(p) = current {
-            steps += 1;
-            if steps > rig.nodes.len() {
-                return Err(RigError::Node {
-                    path: path.to_owned(),
-                    node: start,
-                    reason: "lies on a cycle".into(),
-                });
+        let mut current = Some(start);
+        while let Some(n) = current {
+            match seen[n] {
+                Seen::EndsAtRoot => break,
+                Seen::OnThisWalk => return Err(node_error(start, "lies on a cycle")),
+                Seen::No => {
+                    seen[n] = Seen::OnThisWalk;
+                    walk.push(n);
+                    current = parents[n];
+                }
             }
-            current = parents[p];
+        }
+        for n in walk.drain(..) {
+            seen[n] = Seen::EndsAtRoot;
         }
     }
     Ok(())
+}
+
+/// Flat `[x, y, z, x, y, z, ...]` values as triples.
+fn triples(values: Vec<f32>) -> Vec<[f32; 3]> {
+    values.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
 }
 
 fn mesh_name(mesh: &gltf::Mesh<'_>) -> String {
@@ -425,8 +560,9 @@ fn flatten_matrix(m: [[f32; 4]; 4]) -> [f32; 16] {
     out
 }
 
-/// The bytes of every buffer: the GLB's binary chunk, a file beside `path`, or a
-/// base64 `data:` URI.
+/// The bytes of every buffer: the GLB's binary chunk, a base64 `data:` URI, or a
+/// regular file inside `path`'s folder (percent-decoded, symlinks resolved; anything
+/// else refused by [`desal_io::confine::read_inside`]).
 fn load_buffers(path: &Path, document: &Document, blob: Option<&[u8]>) -> Result<Vec<Vec<u8>>, RigError> {
     let mut out = Vec::new();
     for buffer in document.buffers() {
@@ -440,15 +576,14 @@ fn load_buffers(path: &Path, document: &Document, blob: Option<&[u8]>) -> Result
                     uri.split_once(";base64,").ok_or_else(|| bad("data URI is not base64".into()))?;
                 decode_base64(encoded).ok_or_else(|| bad("data URI is not valid base64".into()))?
             }
-            gltf::buffer::Source::Uri(uri) => {
-                if uri.contains("://") {
-                    return Err(bad(format!(
-                        "URI '{uri}' is not a file beside the glTF; only relative file paths are read"
-                    )));
-                }
-                let file = path.parent().unwrap_or(Path::new(".")).join(uri);
-                std::fs::read(&file).map_err(|e| bad(format!("cannot read {}: {e}", file.display())))?
-            }
+            // A regular file inside the glTF's own folder, or nothing (desal_io's one rule
+            // for paths found inside data).
+            gltf::buffer::Source::Uri(uri) => desal_io::confine::read_inside(
+                path,
+                &format!("buffer {}", buffer.index()),
+                uri,
+                MAX_BUFFER_BYTES,
+            )?,
         };
         if data.len() < buffer.length() {
             return Err(bad(format!("declares {} bytes but holds {}", buffer.length(), data.len())));
@@ -487,7 +622,17 @@ fn decode_base64(text: &str) -> Option<Vec<u8>> {
 
 #[cfg(test)]
 mod tests {
-    use super::decode_base64;
+    use super::{Path, decode_base64, without_panics};
+
+    #[test]
+    fn d1_a_panic_while_reading_becomes_an_error_naming_the_file() {
+        let result: Result<(), _> = without_panics(Path::new("odd.glb"), || panic!("index out of bounds"));
+        let message = result.unwrap_err().to_string();
+        assert!(
+            message.starts_with("odd.glb: the glTF reader failed on this file (index out of bounds)"),
+            "{message}"
+        );
+    }
 
     #[test]
     fn base64_decodes_padded_and_unpadded_text() {

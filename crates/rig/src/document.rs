@@ -1,0 +1,89 @@
+//! A glTF file's bytes (`.glb` or `.gltf`) into the `gltf` crate's validated
+//! [`gltf::Document`], with the JSON read once as a [`serde_json::Value`] and made fit
+//! for the crate first:
+//!
+//! - **`extras`** may be any JSON value (glTF 2.0 §3.2 "extras"), but the crate, built
+//!   without its `extras` feature, accepts only objects and would refuse the whole file;
+//!   desal never reads `extras`, so every `extras` that is not an object is dropped.
+//! - **Extensions desal reads itself** ([`HANDLED_EXTENSIONS`]: `KHR_mesh_quantization`,
+//!   whose integer attributes [`crate::accessor`] converts) are taken out of
+//!   `extensionsRequired`, which the crate refuses for any extension it does not know.
+//!
+//! [`crate::read::read_rig_from`] catches any panic of the crate (none is expected).
+
+use std::path::Path;
+
+use serde_json::Value;
+
+use crate::RigError;
+
+/// Extensions that desal implements, so a file may require them.
+pub const HANDLED_EXTENSIONS: &[&str] = &["KHR_mesh_quantization"];
+
+/// A parsed, validated glTF file.
+pub struct Parsed {
+    pub document: gltf::Document,
+    /// The GLB binary chunk, if any.
+    pub blob: Option<Vec<u8>>,
+    /// The names in `extensionsUsed` and `extensionsRequired`.
+    pub extensions: Vec<String>,
+}
+
+/// Parses `bytes` (GLB or JSON glTF); `path` names the file in errors.
+pub fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, RigError> {
+    let gltf_error = |cause: gltf::Error| RigError::Gltf { path: path.to_owned(), cause };
+    let (json, blob) = if bytes.starts_with(b"glTF") {
+        // The crate subtracts the header's 12 bytes from its length field unchecked.
+        if let Some(length) = bytes.get(8..12).map(|l| u32::from_le_bytes([l[0], l[1], l[2], l[3]]))
+            && length < 12
+        {
+            let error = gltf::binary::Error::Length { length, length_read: bytes.len() };
+            return Err(gltf_error(gltf::Error::Binary(error)));
+        }
+        let glb = gltf::binary::Glb::from_slice(bytes).map_err(gltf_error)?;
+        (glb.json.into_owned(), glb.bin.map(|b| b.into_owned()))
+    } else {
+        (bytes.to_vec(), None)
+    };
+    let mut value: Value =
+        serde_json::from_slice(&json).map_err(|e| gltf_error(gltf::Error::Deserialize(e)))?;
+    let extensions = declared_extensions(&value);
+    drop_non_object_extras(&mut value);
+    if let Some(Value::Array(required)) = value.get_mut("extensionsRequired") {
+        required.retain(|e| !e.as_str().is_some_and(|e| HANDLED_EXTENSIONS.contains(&e)));
+    }
+    let root: gltf::json::Root =
+        serde_json::from_value(value).map_err(|e| gltf_error(gltf::Error::Deserialize(e)))?;
+    let document = gltf::Document::from_json(root).map_err(gltf_error)?;
+    Ok(Parsed { document, blob, extensions })
+}
+
+/// The extension names the file declares (`extensionsUsed` and `extensionsRequired`).
+fn declared_extensions(value: &Value) -> Vec<String> {
+    ["extensionsUsed", "extensionsRequired"]
+        .iter()
+        .filter_map(|key| value.get(key)?.as_array())
+        .flatten()
+        .filter_map(|e| e.as_str().map(str::to_owned))
+        .collect()
+}
+
+/// Removes every `extras` whose value is not an object, at any depth (not descending
+/// into `extras` themselves: what lies inside is the application's, never parsed).
+fn drop_non_object_extras(value: &mut Value) {
+    // Iterative, so a deeply nested file cannot overflow the stack here (serde_json
+    // already refuses nesting deeper than 128).
+    let mut stack = vec![value];
+    while let Some(v) = stack.pop() {
+        match v {
+            Value::Object(map) => {
+                if map.get("extras").is_some_and(|e| !e.is_object()) {
+                    map.remove("extras");
+                }
+                stack.extend(map.iter_mut().filter(|(k, _)| k.as_str() != "extras").map(|(_, v)| v));
+            }
+            Value::Array(items) => stack.extend(items.iter_mut()),
+            _ => {}
+        }
+    }
+}
