@@ -624,10 +624,6 @@ fn simplify_rig<'py>(
         // Refused now, not after the simplification: an output that is a folder or a FIFO.
         desal_io::confine::write_target(&out).map_err(errors::io)?;
         let s = detached(py, progress, |p| {
-            // The rig's own reader does not yet refuse a FIFO (which would hang) or a
-            // device (read until memory runs out); read_regular_file does, reading the
-            // rig once more (milliseconds next to the simplification).
-            desal_io::file::read_regular_file(&file).map_err(|e| errors::input(e.into()))?;
             let s = memory::simplify_rig(&file, &rig, &params, stage3, p).map_err(errors::classify)?;
             desal_io::write_atomic(&out, &s.glb).map_err(errors::io)?;
             Ok(s)
