@@ -29,10 +29,17 @@ fn with_float_view<R, D: Dimension>(
         return f(FloatView::F32(a.as_array()));
     }
     let py = obj.py();
-    let converted = py
+    let array = py
         .import("numpy")?
-        .call_method1("asarray", (obj, "float64"))
+        .call_method1("asarray", (obj,))
         .map_err(|e| bad(argument, format!("is not a float array: {e}")))?;
+    // Only real numbers are positions: numpy would turn complex into its real part
+    // (with a warning), bools into 0 and 1, and strings into the numbers they spell.
+    let kind: String = array.getattr("dtype")?.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "f" | "i" | "u") {
+        return Err(bad(argument, format!("must be a float array, not {}", dtype_name(&array)?)));
+    }
+    let converted = array.call_method1("astype", ("float64",))?;
     match converted.extract::<PyReadonlyArray<'_, f64, D>>() {
         Ok(a) => f(FloatView::F64(a.as_array())),
         Err(_) => {
@@ -131,6 +138,11 @@ fn check_columns(argument: &str, shape: &[usize], shape_text: &str) -> PyResult<
     Ok(())
 }
 
+/// The dtype's name (`complex128`, `<U3`, `bool`).
+fn dtype_name(array: &Bound<'_, PyAny>) -> PyResult<String> {
+    Ok(array.getattr("dtype")?.str()?.to_string())
+}
+
 /// `obj` as an int64 array (any integer dtype converts exactly, int64 without a copy;
 /// floats and the rest are refused).
 fn int64_array<'py>(argument: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
@@ -139,8 +151,14 @@ fn int64_array<'py>(argument: &str, obj: &Bound<'py, PyAny>) -> PyResult<Bound<'
     let array = np.call_method1("asarray", (obj,)).map_err(|e| bad(argument, e))?;
     let kind: String = array.getattr("dtype")?.getattr("kind")?.extract()?;
     if kind != "i" && kind != "u" {
-        let dtype = array.getattr("dtype")?.str()?.to_string();
-        return Err(bad(argument, format!("must be an integer array, not {dtype}")));
+        return Err(bad(argument, format!("must be an integer array, not {}", dtype_name(&array)?)));
+    }
+    // uint64 values past int64 would wrap to negative indices in the cast below.
+    if kind == "u" && array.getattr("size")?.extract::<usize>()? > 0 {
+        let max = array.call_method0("max")?;
+        if max.gt(i64::MAX)? {
+            return Err(bad(argument, format!("has the value {max}, too large for an index")));
+        }
     }
     let kwargs = pyo3::types::PyDict::new(py);
     kwargs.set_item("copy", false)?;

@@ -2,7 +2,14 @@
 //! pipeline on NumPy arrays. The stages are the root package's own (`desal::memory`, the
 //! same calls `desal run` makes), so the same arrays give the same bytes as the CLI.
 //! The GIL is released while a stage computes.
+//!
+//! Every entry point runs inside [`errors::guard`] (a Rust panic is `desal.Error`, never a
+//! `PanicException`), takes its arguments through [`args`] (bad ones are `InputError`s
+//! in the caller's words), reads user paths through `desal_io::file::read_regular_file`
+//! and writes through `desal_io::write_atomic` (`_write_file` for the Python layer's own
+//! writers), the one rule desal's readers and writers follow.
 
+mod args;
 mod artifacts;
 mod convert;
 mod errors;
@@ -18,18 +25,21 @@ use desal::stages::simplify::{self as simplify_stage, Cost, Method, SimplifyPara
 use desal_io::artifact::{FitV1, SaliencyV1, SimplifiedV1};
 use desal_mesh::{PartLabels, PoseSet, TriMesh};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
-use serde::de::DeserializeOwned;
+use pyo3::types::{PyDict, PyString};
 
+use crate::args::{table, table_as};
 use crate::convert::bad;
-use crate::errors::{Error, InputError};
+use crate::errors::{Error, InputError, guard};
 use crate::progress::PyProgress;
 
-/// Stage parameters from the JSON the Python layer builds from keyword arguments, with
-/// the pipeline file's names and checks (`unknown field`, ranges).
-fn params<T: DeserializeOwned>(what: &str, json: Option<&str>) -> PyResult<T> {
-    serde_json::from_str(json.unwrap_or("{}")).map_err(|e| InputError::new_err(format!("{what}: {e}")))
-}
+/// The most frames `simplify_rig` poses a rig at (per source: `poses="both"` gives twice
+/// as many poses). A larger count would need more memory than a pose set of that size
+/// is worth (the sample rig at 10 000 frames is 3.5 GB of positions), and a count like
+/// 10**12 would abort the interpreter in the allocator, where no error can be raised.
+pub const MAX_RIG_FRAMES: usize = 10_000;
+
+/// The fit table's keys as `simplify_pose_set`, `simplify_rig` and `hierarchy` name them.
+const FIT_METHOD: &[(&str, &str)] = &[("method", "fit_method")];
 
 /// Runs `f` with the GIL released, reporting to `callback`.
 fn detached<T: Send>(
@@ -37,7 +47,7 @@ fn detached<T: Send>(
     callback: Option<Py<PyAny>>,
     f: impl FnOnce(&PyProgress) -> PyResult<T> + Send,
 ) -> PyResult<T> {
-    let progress = PyProgress::new(callback);
+    let progress = PyProgress::new(args::progress(callback, py)?);
     let result = py.detach(|| f(&progress));
     progress.into_result()?;
     result
@@ -63,6 +73,9 @@ fn detached<T: Send>(
 struct PyPoseSet {
     set: PoseSet,
     labels: PartLabels,
+    /// [`content_digest`] of `set` and `labels`: a `Fit` records the one it was computed
+    /// from, so it is never used with another pose set.
+    digest: u64,
     /// The discovery's report when the labels were discovered.
     parts: Option<serde_json::Value>,
     removed_faces: (usize, usize),
@@ -71,35 +84,43 @@ struct PyPoseSet {
 #[pymethods]
 impl PyPoseSet {
     #[new]
-    #[pyo3(signature = (poses, faces, labels=None, template=0, names=None, part_names=None, parts=None, progress=None))]
+    #[pyo3(signature = (poses, faces, labels=None, template=None, names=None, part_names=None, parts=None, progress=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         poses: &Bound<'_, PyAny>,
         faces: &Bound<'_, PyAny>,
         labels: Option<&Bound<'_, PyAny>>,
-        template: usize,
-        names: Option<Vec<String>>,
-        part_names: Option<Vec<String>>,
-        parts: Option<&str>,
+        template: Option<&Bound<'_, PyAny>>,
+        names: Option<&Bound<'_, PyAny>>,
+        part_names: Option<&Bound<'_, PyAny>>,
+        parts: Option<&Bound<'_, PyAny>>,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Self> {
-        let positions = convert::poses(poses)?;
-        let faces = convert::faces("faces", faces)?;
-        let ids = labels.map(|l| convert::ids("labels", l)).transpose()?;
-        detached(py, progress, move |_| {
-            let built = memory::pose_set(names, positions, faces, template).map_err(errors::input)?;
-            let set = built.set;
-            let (labels, parts) = match ids {
-                Some(ids) => (memory::labels(ids, part_names, &set).map_err(errors::input)?, None),
-                None => {
-                    let params: PartsParams = params("parts", parts)?;
-                    let (labels, summary) = memory::discover_parts(&params, &set).map_err(errors::failed)?;
-                    (labels, Some(serde_json::to_value(summary).map_err(|e| Error::new_err(e.to_string()))?))
-                }
-            };
-            let removed_faces = (built.cleanup.degenerate.len(), built.cleanup.duplicate.len());
-            Ok(PyPoseSet { set, labels, parts, removed_faces })
+        guard("PoseSet", || {
+            let positions = convert::poses(poses)?;
+            let faces = convert::faces("faces", faces)?;
+            let ids = labels.map(|l| convert::ids("labels", l)).transpose()?;
+            let template = template.map(|t| args::index("template", t)).transpose()?.unwrap_or(0);
+            let names = names.map(|n| args::strings("names", n)).transpose()?;
+            let part_names = part_names.map(|n| args::strings("part_names", n)).transpose()?;
+            let parts = parts.map(parts_json).transpose()?;
+            let parts: PartsParams = table("parts", parts.as_deref())?;
+            detached(py, progress, move |_| {
+                let built = memory::pose_set(names, positions, faces, template).map_err(errors::input)?;
+                let set = built.set;
+                let (labels, parts) = match ids {
+                    Some(ids) => (memory::labels(ids, part_names, &set).map_err(errors::input)?, None),
+                    None => {
+                        let (labels, summary) =
+                            memory::discover_parts(&parts, &set).map_err(errors::classify)?;
+                        (labels, Some(json(&summary)?))
+                    }
+                };
+                let removed_faces = (built.cleanup.degenerate.len(), built.cleanup.duplicate.len());
+                let digest = content_digest(&set, &labels);
+                Ok(PyPoseSet { set, labels, digest, parts, removed_faces })
+            })
         })
     }
 
@@ -174,6 +195,39 @@ impl PyPoseSet {
     }
 }
 
+/// `PoseSet(parts=...)`: the JSON of a `[dataset.parts]` table, or the table as a dict.
+fn parts_json(parts: &Bound<'_, PyAny>) -> PyResult<String> {
+    if let Ok(text) = parts.cast::<PyString>() {
+        return Ok(text.to_string());
+    }
+    if parts.cast::<PyDict>().is_err() {
+        return Err(bad("parts", format!("parts={} must be a dict or its JSON", args::repr(parts))));
+    }
+    let kwargs = PyDict::new(parts.py());
+    kwargs.set_item("allow_nan", false)?;
+    let text = parts.py().import("json")?.call_method("dumps", (parts,), Some(&kwargs));
+    text.and_then(|t| t.extract()).map_err(|e| {
+        let e = e.value(parts.py()).to_string();
+        InputError::new_err(format!(
+            "parts={} must hold only finite numbers, strings, bools and lists ({e})",
+            args::repr(parts)
+        ))
+    })
+}
+
+/// A digest of a pose set's content: names, template, positions, faces and labels. Two
+/// `PoseSet`s built from the same arrays have the same digest; a fit of one applies to
+/// the other.
+fn content_digest(set: &PoseSet, labels: &PartLabels) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::hash::DefaultHasher::new();
+    (&set.names, set.template, &set.faces, &labels.labels, &labels.names).hash(&mut h);
+    for p in set.poses.iter().flatten() {
+        (p.x.to_bits(), p.y.to_bits(), p.z.to_bits()).hash(&mut h);
+    }
+    h.finish()
+}
+
 /// Stage 1's result: per pose and part a rigid (or affine) transform, per pose and
 /// vertex the residual distance.
 #[pyclass(name = "Fit", module = "desal", frozen)]
@@ -181,6 +235,8 @@ impl PyPoseSet {
 struct PyFit {
     body: FitV1,
     summary: serde_json::Value,
+    /// The [`content_digest`] of the pose set it was computed from.
+    source: u64,
 }
 
 #[pymethods]
@@ -275,15 +331,17 @@ fn json<T: serde::Serialize>(value: &T) -> PyResult<serde_json::Value> {
 #[pyo3(signature = (ps, options=None, progress=None))]
 fn fit(
     py: Python<'_>,
-    ps: &Bound<'_, PyPoseSet>,
+    ps: &Bound<'_, PyAny>,
     options: Option<&str>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PyFit> {
-    let ps = ps.get();
-    let params: FitParams = params("fit", options)?;
-    detached(py, progress, |p| {
-        let out = memory::fit(&params, &ps.set, &ps.labels, p).map_err(errors::failed)?;
-        Ok(PyFit { summary: json(&out.summary)?, body: out.body })
+    guard("fit", || {
+        let ps = args::instance::<PyPoseSet>("ps", ps)?.get();
+        let params: FitParams = table("fit", options)?;
+        detached(py, progress, |p| {
+            let out = memory::fit(&params, &ps.set, &ps.labels, p).map_err(errors::classify)?;
+            Ok(PyFit { summary: json(&out.summary)?, body: out.body, source: ps.digest })
+        })
     })
 }
 
@@ -292,16 +350,32 @@ fn fit(
 #[pyo3(signature = (ps, fit, options=None))]
 fn saliency(
     py: Python<'_>,
-    ps: &Bound<'_, PyPoseSet>,
-    fit: &Bound<'_, PyFit>,
+    ps: &Bound<'_, PyAny>,
+    fit: &Bound<'_, PyAny>,
     options: Option<&str>,
 ) -> PyResult<PySaliency> {
-    let (ps, fit) = (ps.get(), fit.get());
-    let params: SaliencyParams = params("saliency", options)?;
-    params.config().map_err(errors::input)?;
-    detached(py, None, |_| {
-        let out = memory::saliency(&params, &ps.set, &fit.body).map_err(errors::failed)?;
-        Ok(PySaliency { summary: json(&out.summary)?, body: out.body })
+    guard("saliency", || {
+        let ps = args::instance::<PyPoseSet>("ps", ps)?.get();
+        let fit = args::instance::<PyFit>("fit", fit)?.get();
+        if fit.source != ps.digest {
+            return Err(bad(
+                "fit",
+                format!(
+                    "was computed from another pose set ({} poses x {} vertices), not this one ({} poses x {} vertices); \
+                     compute it with desal.fit(ps)",
+                    fit.body.pose_names.len(),
+                    fit.body.vertex_count,
+                    ps.set.pose_count(),
+                    ps.set.vertex_count()
+                ),
+            ));
+        }
+        let params: SaliencyParams = table("saliency", options)?;
+        params.config().map_err(errors::input)?;
+        detached(py, None, |_| {
+            let out = memory::saliency(&params, &ps.set, &fit.body).map_err(errors::classify)?;
+            Ok(PySaliency { summary: json(&out.summary)?, body: out.body })
+        })
     })
 }
 
@@ -332,41 +406,43 @@ fn simplify<'py>(
     labels: Option<&Bound<'py, PyAny>>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyDict>)> {
-    let positions = convert::points_f64("vertices", vertices)?;
-    let faces = convert::faces("faces", faces)?;
-    let mut params: SimplifyParams = params("simplify", options)?;
-    params.saliency = weights.is_some();
-    let weights = weights.map(|w| convert::values_f64("weights", w)).transpose()?.unwrap_or_default();
-    let labels = labels.map(|l| convert::ids("labels", l)).transpose()?;
-    let config = params.config().map_err(errors::input)?;
-    let out = detached(py, progress, move |p| {
-        let mesh = TriMesh::try_new(positions.into_iter().map(Into::into).collect(), faces, "vertices")
-            .map_err(|e| errors::input(e.into()))?;
-        let n = mesh.vertex_count();
-        if config.saliency && weights.len() != n {
-            return Err(bad(
-                "weights",
-                format!("has {} entries but the mesh has {n} vertices", weights.len()),
-            ));
-        }
-        let labels = match labels {
-            Some(ids) if ids.len() != n => {
+    guard("simplify", || {
+        let positions = convert::points_f64("vertices", vertices)?;
+        let faces = convert::faces("faces", faces)?;
+        let mut params: SimplifyParams = table("simplify", options)?;
+        params.saliency = weights.is_some();
+        let weights = weights.map(|w| convert::values_f64("weights", w)).transpose()?.unwrap_or_default();
+        let labels = labels.map(|l| convert::ids("labels", l)).transpose()?;
+        let config = params.config().map_err(errors::input)?;
+        let out = detached(py, progress, move |p| {
+            let mesh = TriMesh::try_new(positions.into_iter().map(Into::into).collect(), faces, "vertices")
+                .map_err(|e| errors::input(e.into()))?;
+            let n = mesh.vertex_count();
+            if config.saliency && weights.len() != n {
                 return Err(bad(
-                    "labels",
-                    format!("has {} entries but the mesh has {n} vertices", ids.len()),
+                    "weights",
+                    format!("has {} entries but the mesh has {n} vertices", weights.len()),
                 ));
             }
-            Some(ids) => PartLabels::from_ids(ids),
-            None => PartLabels::from_ids(vec![0; n]),
-        };
-        simplify_stage::compute(&config, &mesh, &weights, &labels, p).map_err(errors::input)
-    })?;
-    let report = simplified_report(py, &out.body, &json(&out.summary)?, &out.note)?;
-    Ok((
-        convert::rows(py, &out.body.positions).into_any(),
-        convert::face_array(py, &out.body.faces).into_any(),
-        report,
-    ))
+            let labels = match labels {
+                Some(ids) if ids.len() != n => {
+                    return Err(bad(
+                        "labels",
+                        format!("has {} entries but the mesh has {n} vertices", ids.len()),
+                    ));
+                }
+                Some(ids) => PartLabels::from_ids(ids),
+                None => PartLabels::from_ids(vec![0; n]),
+            };
+            simplify_stage::compute(&config, &mesh, &weights, &labels, p).map_err(errors::input)
+        })?;
+        let report = simplified_report(py, &out.body, &json(&out.summary)?, &out.note)?;
+        Ok((
+            convert::rows(py, &out.body.positions).into_any(),
+            convert::face_array(py, &out.body.faces).into_any(),
+            report,
+        ))
+    })
 }
 
 /// Stage 4: maps a simplification of the pose set's template to original vertices and
@@ -375,41 +451,46 @@ fn simplify<'py>(
 #[pyo3(signature = (ps, simplified_vertices, simplified_faces, simp_to_orig=None))]
 fn map<'py>(
     py: Python<'py>,
-    ps: &Bound<'py, PyPoseSet>,
+    ps: &Bound<'py, PyAny>,
     simplified_vertices: &Bound<'py, PyAny>,
     simplified_faces: &Bound<'py, PyAny>,
     simp_to_orig: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    let ps = ps.get();
-    let positions = convert::points_f64("simplified_vertices", simplified_vertices)?;
-    let faces = convert::faces("simplified_faces", simplified_faces)?;
-    let kept = simp_to_orig.map(|k| convert::indices("simp_to_orig", k, true)).transpose()?;
-    let (map, poses) = detached(py, None, move |_| {
-        let mesh =
-            TriMesh::try_new(positions.into_iter().map(Into::into).collect(), faces, "simplified_vertices")
-                .map_err(|e| errors::input(e.into()))?;
-        let mut body = simplify_stage::external(&mesh);
-        if let Some(kept) = kept {
-            if kept.len() != mesh.vertex_count() {
-                return Err(bad(
-                    "simp_to_orig",
-                    format!(
-                        "has {} entries but there are {} simplified vertices",
-                        kept.len(),
-                        mesh.vertex_count()
-                    ),
-                ));
+    guard("map", || {
+        let ps = args::instance::<PyPoseSet>("ps", ps)?.get();
+        let positions = convert::points_f64("simplified_vertices", simplified_vertices)?;
+        let faces = convert::faces("simplified_faces", simplified_faces)?;
+        let kept = simp_to_orig.map(|k| convert::indices("simp_to_orig", k, true)).transpose()?;
+        let (map, poses) = detached(py, None, move |_| {
+            let mesh = TriMesh::try_new(
+                positions.into_iter().map(Into::into).collect(),
+                faces,
+                "simplified_vertices",
+            )
+            .map_err(|e| errors::input(e.into()))?;
+            let mut body = simplify_stage::external(&mesh);
+            if let Some(kept) = kept {
+                if kept.len() != mesh.vertex_count() {
+                    return Err(bad(
+                        "simp_to_orig",
+                        format!(
+                            "has {} entries but there are {} simplified vertices",
+                            kept.len(),
+                            mesh.vertex_count()
+                        ),
+                    ));
+                }
+                body.simp_to_orig = kept;
+                body.placement = "given".into();
+                body.input_vertices = ps.set.vertex_count() as u32;
+                body.input_faces = ps.set.face_count() as u32;
             }
-            body.simp_to_orig = kept;
-            body.placement = "given".into();
-            body.input_vertices = ps.set.vertex_count() as u32;
-            body.input_faces = ps.set.face_count() as u32;
-        }
-        let out = desal::stages::map::compute(&body, &ps.set, &ps.labels).map_err(errors::input)?;
-        let (poses, _) = memory::apply_map(&out.body, &ps.set, &ps.labels).map_err(errors::failed)?;
-        Ok((out.body, poses))
-    })?;
-    Ok((convert::index_array(py, map.simp_to_orig.iter().copied()).into_any(), pose_array(py, &poses)))
+            let out = desal::stages::map::compute(&body, &ps.set, &ps.labels).map_err(errors::input)?;
+            let (poses, _) = memory::apply_map(&out.body, &ps.set, &ps.labels).map_err(errors::classify)?;
+            Ok((out.body, poses))
+        })?;
+        Ok((convert::index_array(py, map.simp_to_orig.iter().copied()).into_any(), pose_array(py, &poses)))
+    })
 }
 
 fn pose_array<'py>(py: Python<'py>, set: &PoseSet) -> Bound<'py, PyAny> {
@@ -427,9 +508,9 @@ fn stage_params(
     simplify: Option<&str>,
 ) -> PyResult<(StageParams, Stage3)> {
     let mut p = StageParams {
-        fit: params("fit", fit)?,
-        saliency: params("saliency", saliency)?,
-        simplify: params("simplify", simplify)?,
+        fit: table_as("fit", fit, FIT_METHOD)?,
+        saliency: table("saliency", saliency)?,
+        simplify: table("simplify", simplify)?,
     };
     let stage3 = if method == "multipose" { Stage3::Multipose } else { Stage3::Template };
     // desal's own methods (docs/eval/desal-method.md), as `[simplify] method` names
@@ -462,51 +543,56 @@ fn stage_params(
 #[pyo3(signature = (ps, method="paper", fit=None, saliency=None, simplify=None, progress=None))]
 fn simplify_pose_set<'py>(
     py: Python<'py>,
-    ps: &Bound<'py, PyPoseSet>,
+    ps: &Bound<'py, PyAny>,
     method: &str,
     fit: Option<&str>,
     saliency: Option<&str>,
     simplify: Option<&str>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let ps = ps.get();
-    let (params, stage3) = stage_params(method, fit, saliency, simplify)?;
-    let (s, poses, labels) = detached(py, progress, |p| {
-        let s = memory::simplify_pose_set(&params, &ps.set, &ps.labels, stage3, p).map_err(errors::failed)?;
-        let (poses, labels) = memory::apply_map(&s.map.body, &ps.set, &ps.labels).map_err(errors::failed)?;
-        Ok((s, poses, labels))
-    })?;
-    let out = PyDict::new(py);
-    out.set_item("vertex_map", convert::index_array(py, s.map.body.simp_to_orig.iter().copied()))?;
-    out.set_item("faces", convert::face_array(py, &s.map.body.faces))?;
-    out.set_item("poses", pose_array(py, &poses))?;
-    out.set_item("labels", convert::index_array(py, labels.labels.iter().copied()))?;
-    out.set_item("saliency", convert::vector(py, &s.saliency.body.saliency))?;
-    out.set_item("weights", convert::vector(py, &s.saliency.body.weights))?;
-    out.set_item("simplified_vertices", convert::rows(py, &s.simplified.body.positions))?;
-    let report = PyDict::new(py);
-    report.set_item("method", method)?;
-    report.set_item("fit", convert::to_python(py, &s.fit.summary)?)?;
-    report.set_item("saliency", convert::to_python(py, &s.saliency.summary)?)?;
-    report.set_item(
-        "simplify",
-        simplified_report(py, &s.simplified.body, &json(&s.simplified.summary)?, &s.simplified.note)?,
-    )?;
-    report.set_item("map", convert::to_python(py, &s.map.summary)?)?;
-    out.set_item("report", report)?;
-    Ok(out)
+    guard("simplify_pose_set", || {
+        let ps = args::instance::<PyPoseSet>("ps", ps)?.get();
+        let (params, stage3) = stage_params(method, fit, saliency, simplify)?;
+        let (s, poses, labels) = detached(py, progress, |p| {
+            let s = memory::simplify_pose_set(&params, &ps.set, &ps.labels, stage3, p)
+                .map_err(errors::classify)?;
+            let (poses, labels) =
+                memory::apply_map(&s.map.body, &ps.set, &ps.labels).map_err(errors::classify)?;
+            Ok((s, poses, labels))
+        })?;
+        let out = PyDict::new(py);
+        out.set_item("vertex_map", convert::index_array(py, s.map.body.simp_to_orig.iter().copied()))?;
+        out.set_item("faces", convert::face_array(py, &s.map.body.faces))?;
+        out.set_item("poses", pose_array(py, &poses))?;
+        out.set_item("labels", convert::index_array(py, labels.labels.iter().copied()))?;
+        out.set_item("saliency", convert::vector(py, &s.saliency.body.saliency))?;
+        out.set_item("weights", convert::vector(py, &s.saliency.body.weights))?;
+        out.set_item("simplified_vertices", convert::rows(py, &s.simplified.body.positions))?;
+        let report = PyDict::new(py);
+        report.set_item("method", method)?;
+        report.set_item("fit", convert::to_python(py, &s.fit.summary)?)?;
+        report.set_item("saliency", convert::to_python(py, &s.saliency.summary)?)?;
+        report.set_item(
+            "simplify",
+            simplified_report(py, &s.simplified.body, &json(&s.simplified.summary)?, &s.simplified.note)?,
+        )?;
+        report.set_item("map", convert::to_python(py, &s.map.summary)?)?;
+        out.set_item("report", report)?;
+        Ok(out)
+    })
 }
 
 /// A skinned glTF rig simplified as `desal run` simplifies a `[dataset.rig]`, written to
 /// `out` as a `.glb` (the bytes `desal run` writes as `simplified.glb`); returns the
-/// report. `rig` is the JSON of the `[dataset.rig]` table without `file`.
+/// report. `rig` is the JSON of the `[dataset.rig]` table without `file`; `frames` is
+/// at most [`MAX_RIG_FRAMES`].
 #[pyfunction]
 #[pyo3(signature = (file, out, rig=None, method="paper", fit=None, saliency=None, simplify=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 fn simplify_rig<'py>(
     py: Python<'py>,
-    file: std::path::PathBuf,
-    out: std::path::PathBuf,
+    file: &Bound<'py, PyAny>,
+    out: &Bound<'py, PyAny>,
     rig: Option<&str>,
     method: &str,
     fit: Option<&str>,
@@ -514,52 +600,55 @@ fn simplify_rig<'py>(
     simplify: Option<&str>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let mut table: serde_json::Value = params("rig", rig)?;
-    let Some(object) = table.as_object_mut() else {
-        return Err(InputError::new_err("rig: the settings must be a table"));
-    };
-    if object.contains_key("file") {
-        return Err(bad("rig", "give the rig's path as the first argument, not as `file`"));
-    }
-    object.insert("file".into(), file.display().to_string().into());
-    let rig: RigParams =
-        serde_json::from_value(table).map_err(|e| InputError::new_err(format!("rig: {e}")))?;
-    rig.frame_config().map_err(errors::input)?;
-    rig.parts_config().map_err(errors::input)?;
-    rig.weight_options().map_err(errors::input)?;
-    let (params, stage3) = stage_params(method, fit, saliency, simplify)?;
-    let s = detached(py, progress, |p| {
-        let s = memory::simplify_rig(&file, &rig, &params, stage3, p).map_err(|e| {
-            // A rig desal cannot read or pose is the caller's input, not a failure.
-            if e.chain().any(|c| c.is::<desal_rig::RigError>()) {
-                errors::input(e)
-            } else {
-                errors::failed(e)
-            }
+    guard("simplify_rig", || {
+        let (file, out) = (args::path("rig", file)?, args::path("out", out)?);
+        let mut settings: serde_json::Value = table("rig", rig)?;
+        let Some(object) = settings.as_object_mut() else {
+            return Err(InputError::new_err("rig: the settings must be a table"));
+        };
+        if object.contains_key("file") {
+            return Err(bad("rig", "give the rig's path as the first argument, not as `file`"));
+        }
+        object.insert("file".into(), file.display().to_string().into());
+        let rig: RigParams = table("rig", Some(&settings.to_string()))?;
+        if rig.frames > MAX_RIG_FRAMES {
+            return Err(InputError::new_err(format!(
+                "rig: frames={} is more than the {MAX_RIG_FRAMES} frames desal poses a rig at (desal.MAX_RIG_FRAMES)",
+                rig.frames
+            )));
+        }
+        rig.frame_config().map_err(errors::input)?;
+        rig.parts_config().map_err(errors::input)?;
+        rig.weight_options().map_err(errors::input)?;
+        let (params, stage3) = stage_params(method, fit, saliency, simplify)?;
+        // Refused now, not after the simplification: an output that is a folder or a FIFO.
+        desal_io::confine::write_target(&out).map_err(errors::io)?;
+        let s = detached(py, progress, |p| {
+            let s = memory::simplify_rig(&file, &rig, &params, stage3, p).map_err(errors::classify)?;
+            desal_io::write_atomic(&out, &s.glb).map_err(errors::io)?;
+            Ok(s)
         })?;
-        desal_io::write_atomic(&out, &s.glb).map_err(|e| errors::failed(e.into()))?;
-        Ok(s)
-    })?;
-    let report = PyDict::new(py);
-    report.set_item("method", method)?;
-    report.set_item("glb", out)?;
-    report.set_item("rig", convert::to_python(py, &s.rig)?)?;
-    report.set_item("ingest", convert::to_python(py, &s.ingest.summary)?)?;
-    report.set_item("ingest_note", &s.ingest.note)?;
-    report.set_item("labels", convert::to_python(py, &s.labels.summary)?)?;
-    report.set_item("fit", convert::to_python(py, &s.stages.fit.summary)?)?;
-    report.set_item("saliency", convert::to_python(py, &s.stages.saliency.summary)?)?;
-    report.set_item(
-        "simplify",
-        simplified_report(
-            py,
-            &s.stages.simplified.body,
-            &json(&s.stages.simplified.summary)?,
-            &s.stages.simplified.note,
-        )?,
-    )?;
-    report.set_item("map", convert::to_python(py, &s.stages.map.summary)?)?;
-    Ok(report)
+        let report = PyDict::new(py);
+        report.set_item("method", method)?;
+        report.set_item("glb", out)?;
+        report.set_item("rig", convert::to_python(py, &s.rig)?)?;
+        report.set_item("ingest", convert::to_python(py, &s.ingest.summary)?)?;
+        report.set_item("ingest_note", &s.ingest.note)?;
+        report.set_item("labels", convert::to_python(py, &s.labels.summary)?)?;
+        report.set_item("fit", convert::to_python(py, &s.stages.fit.summary)?)?;
+        report.set_item("saliency", convert::to_python(py, &s.stages.saliency.summary)?)?;
+        report.set_item(
+            "simplify",
+            simplified_report(
+                py,
+                &s.stages.simplified.body,
+                &json(&s.stages.simplified.summary)?,
+                &s.stages.simplified.note,
+            )?,
+        )?;
+        report.set_item("map", convert::to_python(py, &s.stages.map.summary)?)?;
+        Ok(report)
+    })
 }
 
 /// A hierarchy of coarse levels: the npz arrays (`levels`, `F{k}`, `A{k}_*`, `D{k}_*`,
@@ -569,7 +658,7 @@ fn simplify_rig<'py>(
 #[allow(clippy::too_many_arguments)]
 fn hierarchy<'py>(
     py: Python<'py>,
-    ps: &Bound<'py, PyPoseSet>,
+    ps: &Bound<'py, PyAny>,
     hierarchy: &str,
     method: &str,
     fit: Option<&str>,
@@ -577,121 +666,167 @@ fn hierarchy<'py>(
     simplify: Option<&str>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<(Bound<'py, PyDict>, Bound<'py, PyAny>)> {
-    let ps = ps.get();
-    let (stage, stage3) = stage_params(method, fit, saliency, simplify)?;
-    if stage3 != Stage3::Template {
-        return Err(bad(
-            "method",
-            "a hierarchy's levels are simplified by a cost (paper, qslim, saliency, balance) or by desal or desal-refit",
-        ));
-    }
-    let h: HierarchyParams = params("hierarchy", Some(hierarchy))?;
-    h.config().map_err(errors::input)?;
-    h.check_levels(Some(ps.set.vertex_count())).map_err(errors::input)?;
-    let (arrays, summaries) = detached(py, progress, |p| {
-        memory::hierarchy(&stage, &h, &ps.set, &ps.labels, p).map_err(errors::failed)
-    })?;
-    let dict = artifacts::hierarchy_dict(py, &arrays)?;
-    Ok((dict, convert::to_python(py, &summaries)?))
+    guard("hierarchy", || {
+        let ps = args::instance::<PyPoseSet>("ps", ps)?.get();
+        let (stage, stage3) = stage_params(method, fit, saliency, simplify)?;
+        if stage3 != Stage3::Template {
+            return Err(bad(
+                "method",
+                "a hierarchy's levels are simplified by a cost (paper, qslim, saliency, balance) or by desal or desal-refit",
+            ));
+        }
+        let h: HierarchyParams = table("hierarchy", Some(hierarchy))?;
+        h.config().map_err(errors::input)?;
+        h.check_levels(Some(ps.set.vertex_count())).map_err(errors::input)?;
+        let (arrays, summaries) = detached(py, progress, |p| {
+            memory::hierarchy(&stage, &h, &ps.set, &ps.labels, p).map_err(errors::classify)
+        })?;
+        let dict = artifacts::hierarchy_dict(py, &arrays)?;
+        Ok((dict, convert::to_python(py, &summaries)?))
+    })
 }
 
 /// Runs a pipeline file with the cache, as `desal run` does; returns one report per
 /// dataset (`report.json`).
 #[pyfunction]
-#[pyo3(signature = (pipeline, out=None, force=false, from_stage=None, jobs=1, cache_dir=None, explain=false, progress=false))]
+#[pyo3(signature = (pipeline, out=None, force=false, from_stage=None, jobs=None, cache_dir=None, explain=false, progress=false))]
 #[allow(clippy::too_many_arguments)]
 fn run<'py>(
     py: Python<'py>,
-    pipeline: std::path::PathBuf,
-    out: Option<std::path::PathBuf>,
+    pipeline: &Bound<'py, PyAny>,
+    out: Option<&Bound<'py, PyAny>>,
     force: bool,
     from_stage: Option<&str>,
-    jobs: usize,
-    cache_dir: Option<std::path::PathBuf>,
+    jobs: Option<&Bound<'py, PyAny>>,
+    cache_dir: Option<&Bound<'py, PyAny>>,
     explain: bool,
     progress: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     use clap::ValueEnum as _;
-    let from = from_stage
-        .map(|s| {
-            desal::stages::runner::Stage::from_str(s, true).map_err(|_| {
-                bad(
-                    "from_stage",
-                    format!(
-                        "'{s}' is not a stage: use ingest, parts, fit, saliency, simplify, map or hierarchy"
-                    ),
-                )
+    guard("run", || {
+        let pipeline = args::path("pipeline", pipeline)?;
+        let out = out.map(|o| args::path("out", o)).transpose()?;
+        let cache_dir = cache_dir.map(|c| args::path("cache_dir", c)).transpose()?;
+        let jobs = jobs.map(|j| args::index("jobs", j)).transpose()?.unwrap_or(1);
+        let from = from_stage
+            .map(|s| {
+                desal::stages::runner::Stage::from_str(s, true).map_err(|_| {
+                    bad(
+                        "from_stage",
+                        format!(
+                            "'{s}' is not a stage: use ingest, parts, fit, saliency, simplify, map or hierarchy"
+                        ),
+                    )
+                })
             })
-        })
-        .transpose()?;
-    let reports = py.detach(|| -> anyhow::Result<_> {
-        let pipeline = desal::pipeline::load(&pipeline, out.as_deref())?;
-        let options = desal::run::RunOptions {
-            out,
-            cache_dir,
-            force,
-            from,
-            jobs: jobs.max(1),
-            progress: if progress {
-                desal::progress::ProgressMode::Auto
-            } else {
-                desal::progress::ProgressMode::Quiet
-            },
-            explain,
-            ..Default::default()
-        };
-        desal::run::run(&pipeline, &options)
-    });
-    let reports = reports.map_err(errors::failed)?;
-    convert::to_python(py, &reports)
+            .transpose()?;
+        let reports = py.detach(|| {
+            // The pipeline file is the caller's input: anything wrong with it (a FIFO or
+            // a device included, which the driver refuses) is an InputError.
+            let pipeline = desal::pipeline::load(&pipeline, out.as_deref()).map_err(errors::input)?;
+            let options = desal::run::RunOptions {
+                out,
+                cache_dir,
+                force,
+                from,
+                jobs: jobs.max(1),
+                progress: if progress {
+                    desal::progress::ProgressMode::Auto
+                } else {
+                    desal::progress::ProgressMode::Quiet
+                },
+                explain,
+                ..Default::default()
+            };
+            desal::run::run(&pipeline, &options).map_err(errors::classify)
+        })?;
+        convert::to_python(py, &reports)
+    })
 }
 
 /// Reads a desal artifact (`.dsa`) into a dict of NumPy arrays and values, with its
 /// `kind`, `version` and `producer`.
 #[pyfunction]
-fn load<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyDict>> {
-    artifacts::load(py, &path)
+fn load<'py>(py: Python<'py>, path: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyDict>> {
+    guard("load", || artifacts::load(py, &args::path("path", path)?))
 }
 
 /// Reads `hierarchy.npz` (as `desal run` writes it) into its arrays, checking the layout.
+/// Only a regular file is read (a FIFO, device or folder is refused by name).
 #[pyfunction]
-fn read_hierarchy_npz<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Bound<'py, PyDict>> {
-    let arrays =
-        py.detach(|| desal_io::npz::read_hierarchy_npz(&path)).map_err(|e| errors::input(e.into()))?;
-    artifacts::hierarchy_dict(py, &arrays)
+fn read_hierarchy_npz<'py>(py: Python<'py>, path: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyDict>> {
+    guard("load_hierarchy", || {
+        let path = args::path("path", path)?;
+        let arrays =
+            py.detach(|| desal_io::npz::read_hierarchy_npz(&path)).map_err(|e| errors::input(e.into()))?;
+        artifacts::hierarchy_dict(py, &arrays)
+    })
 }
 
 /// Writes a hierarchy's arrays (the dict `hierarchy` returns) as `hierarchy.npz`, the
 /// bytes `desal run` writes.
 #[pyfunction]
-fn write_hierarchy_npz(path: std::path::PathBuf, arrays: &Bound<'_, PyDict>) -> PyResult<()> {
-    let h = artifacts::hierarchy_from_dict(arrays)?;
-    desal_io::npz::write_hierarchy_npz(&path, &h).map_err(|e| errors::failed(e.into()))
+fn write_hierarchy_npz(path: &Bound<'_, PyAny>, arrays: &Bound<'_, PyAny>) -> PyResult<()> {
+    guard("Hierarchy.save", || {
+        let path = args::path("path", path)?;
+        let arrays = arrays.cast::<PyDict>().map_err(|_| bad("arrays", "must be a dict of arrays"))?;
+        let h = artifacts::hierarchy_from_dict(arrays)?;
+        desal_io::npz::write_hierarchy_npz(&path, &h).map_err(errors::io)
+    })
+}
+
+/// Writes `data` to `path` by desal's one rule for what may be replaced
+/// (`desal_io::write_atomic`): a temp file beside it, renamed over it (a symlink is
+/// replaced, its target untouched); a character device such as `/dev/null` written
+/// through; a folder, FIFO, socket or block device refused with `InputError`. On any
+/// error nothing is left behind. The Python layer's own writers (`save_graphcmr`) go
+/// through it.
+#[pyfunction]
+fn _write_file(py: Python<'_>, path: &Bound<'_, PyAny>, data: &[u8]) -> PyResult<()> {
+    guard("write", || {
+        let path = args::path("path", path)?;
+        py.detach(|| desal_io::write_atomic(&path, data)).map_err(errors::io)
+    })
+}
+
+/// Panics inside [`guard`], for the tests: proves a Rust panic reaches Python as
+/// `desal.Error`, not as `PanicException`.
+#[pyfunction]
+fn _panic_for_tests(py: Python<'_>, message: &str) -> PyResult<()> {
+    guard("_panic_for_tests", || py.detach(|| panic!("{message}")))
 }
 
 /// Reads a mesh file (PLY, OBJ, OFF) as desal's readers do: (vertices, faces).
 #[pyfunction]
 fn read_mesh<'py>(
     py: Python<'py>,
-    path: std::path::PathBuf,
+    path: &Bound<'py, PyAny>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    let mesh = py.detach(|| desal_io::read_mesh(&path)).map_err(|e| errors::input(e.into()))?;
-    let rows: Vec<[f64; 3]> = mesh.positions.iter().map(|p| [p.x, p.y, p.z]).collect();
-    Ok((convert::rows(py, &rows).into_any(), convert::face_array(py, &mesh.faces).into_any()))
+    guard("read_mesh", || {
+        let path = args::path("path", path)?;
+        let mesh = py.detach(|| desal_io::read_mesh(&path)).map_err(|e| errors::input(e.into()))?;
+        let rows: Vec<[f64; 3]> = mesh.positions.iter().map(|p| [p.x, p.y, p.z]).collect();
+        Ok((convert::rows(py, &rows).into_any(), convert::face_array(py, &mesh.faces).into_any()))
+    })
 }
 
 /// Reads a labels file (`.txt` ids or `.json` with part names) as desal does:
 /// (ids, names).
 #[pyfunction]
-fn read_labels<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<(Bound<'py, PyAny>, Vec<String>)> {
-    let labels = desal_io::labels::read_labels(&path).map_err(|e| errors::input(e.into()))?;
-    Ok((convert::index_array(py, labels.labels.iter().copied()).into_any(), labels.names))
+fn read_labels<'py>(py: Python<'py>, path: &Bound<'py, PyAny>) -> PyResult<(Bound<'py, PyAny>, Vec<String>)> {
+    guard("read_labels", || {
+        let path = args::path("path", path)?;
+        let labels =
+            py.detach(|| desal_io::labels::read_labels(&path)).map_err(|e| errors::input(e.into()))?;
+        Ok((convert::index_array(py, labels.labels.iter().copied()).into_any(), labels.names))
+    })
 }
 
 #[pymodule]
 fn _desal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("MAX_RIG_FRAMES", MAX_RIG_FRAMES)?;
     m.add("InputError", py.get_type::<InputError>())?;
     m.add("Error", py.get_type::<Error>())?;
     m.add_class::<PyPoseSet>()?;
@@ -709,6 +844,8 @@ fn _desal(m: &Bound<'_, PyModule>) -> PyResult<()> {
         wrap_pyfunction!(load, m)?,
         wrap_pyfunction!(read_hierarchy_npz, m)?,
         wrap_pyfunction!(write_hierarchy_npz, m)?,
+        wrap_pyfunction!(_write_file, m)?,
+        wrap_pyfunction!(_panic_for_tests, m)?,
         wrap_pyfunction!(read_mesh, m)?,
         wrap_pyfunction!(read_labels, m)?,
     ] {

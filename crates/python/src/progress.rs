@@ -31,7 +31,7 @@ impl PyProgress {
 
     fn call(&self, label: &str, done: u64, total: u64) {
         let Some(callback) = &self.callback else { return };
-        let mut error = self.error.lock().expect("no panic holds it");
+        let mut error = lock(&self.error);
         if error.is_some() {
             return;
         }
@@ -44,11 +44,17 @@ impl PyProgress {
 
     /// The callback's exception, if it raised one.
     pub fn into_result(self) -> PyResult<()> {
-        match self.error.into_inner().expect("no panic holds it") {
+        match self.error.into_inner().unwrap_or_else(|poisoned| poisoned.into_inner()) {
             Some(e) => Err(e),
             None => Ok(()),
         }
     }
+}
+
+/// The lock's value even when a panic poisoned it: the entry point's guard turns that
+/// panic into `desal.Error`, and the progress state it leaves is still usable.
+fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 impl Progress for PyProgress {
@@ -56,8 +62,7 @@ impl Progress for PyProgress {
         if self.callback.is_none() {
             return;
         }
-        *self.step.lock().expect("no panic holds it") =
-            Step { label: label.to_owned(), total, done: 0, reported: 0 };
+        *lock(&self.step) = Step { label: label.to_owned(), total, done: 0, reported: 0 };
         self.call(label, 0, total);
     }
 
@@ -66,7 +71,7 @@ impl Progress for PyProgress {
             return;
         }
         let report = {
-            let mut step = self.step.lock().expect("no panic holds it");
+            let mut step = lock(&self.step);
             step.done += n;
             let percent = |k: u64| k.saturating_mul(100) / step.total.max(1);
             if percent(step.done) > percent(step.reported) {
@@ -86,7 +91,7 @@ impl Progress for PyProgress {
             return;
         }
         let (label, total) = {
-            let step = self.step.lock().expect("no panic holds it");
+            let step = lock(&self.step);
             (step.label.clone(), step.total)
         };
         self.call(&label, total, total);

@@ -14,14 +14,19 @@ Stages one at a time: :func:`fit`, :func:`saliency`, :func:`simplify` (any mesh)
 Any artifact: :func:`load`.
 
 Bad input raises :class:`InputError` (a ``ValueError``) with the CLI's message, naming
-the pose, vertex, face or part; a failure while computing raises :class:`Error`. The GIL
-is released while a stage computes. Long calls take ``progress=callback`` (called as
+the pose, vertex, face or part, or the argument and the value as it was passed; a
+failure while computing raises :class:`Error` (an internal error in desal's Rust code
+too: no call raises anything outside these two for any argument). Files are read only
+when they are regular files, and written as ``desal run`` writes them (see
+:func:`save_graphcmr`). The GIL is released while a stage computes. Long calls take ``progress=callback`` (called as
 ``callback(step, done, total)``) or ``progress=desal.tqdm_progress()``.
 """
 
 from __future__ import annotations
 
+import io
 import json
+import math
 from dataclasses import dataclass, field
 from os import PathLike
 from typing import Any, Callable, Optional, Sequence, Union
@@ -33,11 +38,15 @@ from ._desal import Error, Fit, InputError, PoseSet, Saliency, load, read_labels
 
 __version__ = _desal.__version__
 
+#: The most frames :func:`simplify_rig` poses a rig at (per pose source).
+MAX_RIG_FRAMES: int = _desal.MAX_RIG_FRAMES
+
 __all__ = [
     "Error",
     "Fit",
     "Hierarchy",
     "InputError",
+    "MAX_RIG_FRAMES",
     "PoseSet",
     "Saliency",
     "Simplification",
@@ -61,25 +70,75 @@ Progress = Optional[Callable[[str, int, int], Any]]
 PathArg = Union[str, "PathLike[str]"]
 
 
-def _options(**values: Any) -> str:
-    """Stage options as the JSON of a pipeline file's table (unset values left out)."""
-    return json.dumps({k: v for k, v in values.items() if v is not None})
+def _json_value(what: str, name: str, value: Any) -> Any:
+    """``value`` as JSON can hold it: NumPy scalars and arrays as Python numbers and
+    lists; NaN, infinities, integers past 64 bits and anything JSON has no form for are
+    refused naming the option (JSON would otherwise carry ``NaN`` that the Rust side
+    could only report as "expected value at line 1 column 11")."""
+    if isinstance(value, np.ndarray):
+        value = value.tolist()
+    elif isinstance(value, np.generic):
+        value = value.item()
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, int):
+        if not -(2**63) <= value < 2**64:
+            raise InputError(f"{what}: {name}={value} is too large")
+        return value
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise InputError(f"{what}: {name}={value!r} must be a finite number")
+        return value
+    if isinstance(value, (list, tuple)):
+        return [_json_value(what, f"{name}[{k}]", v) for k, v in enumerate(value)]
+    kind = type(value).__name__
+    raise InputError(f"{what}: {name}={value!r} must be a number, a str, a bool or a list, not {kind}")
+
+
+def _table(what: str, values: dict) -> str:
+    """The options of the pipeline table ``what`` (``fit``, ``simplify``, …) as JSON,
+    unset (None) values left out. The Rust side parses it into the stage's own settings
+    and names a bad option with its value."""
+    return json.dumps({k: _json_value(what, k, v) for k, v in values.items() if v is not None})
+
+
+def _options_dict(what: str, argument: str, options: Any) -> dict:
+    """A ``*_options`` argument: a dict of a pipeline table's keys, or None."""
+    if options is None:
+        return {}
+    if not isinstance(options, dict) or not all(isinstance(k, str) for k in options):
+        raise InputError(f"{what}: {argument} must be a dict of [dataset.{what}] keys, not {options!r}")
+    return dict(options)
+
+
+def _text(argument: str, value: Any) -> str:
+    if not isinstance(value, str):
+        raise InputError(f"{argument}={value!r} must be a str")
+    return value
+
+
+def _flag(argument: str, value: Any) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputError(f"{argument}={value!r} must be True or False")
+    return bool(value)
 
 
 def _simplify_table(
-    options: Optional[dict],
-    placement: str,
+    options: Any,
+    placement: Optional[str],
     target_vertices: Optional[int],
     target_faces: Optional[int],
     ratio: Optional[float],
 ) -> str:
     """A pipeline file's ``[dataset.simplify]`` table as JSON: ``options`` with the
-    placement and whichever target is given."""
-    table = dict(options or {})
+    placement (when given: unset, the table's default or the method's own) and whichever
+    target is given."""
+    table = _options_dict("simplify", "simplify_options", options)
     targets = dict(target_vertices=target_vertices, target_faces=target_faces, ratio=ratio)
     table.update({k: v for k, v in targets.items() if v is not None})
-    table["placement"] = placement
-    return json.dumps(table)
+    if placement is not None:
+        table["placement"] = placement
+    return _table("simplify", table)
 
 
 def _pose_set(poses: Any, faces: Any, labels: Any, template: int, progress: Progress) -> PoseSet:
@@ -99,7 +158,7 @@ def fit(ps: PoseSet, method: str = "rigid", progress: Progress = None) -> Fit:
     literal fit). The result has ``rotations`` (P, K, 3, 3), ``translations`` (P, K, 3),
     ``residuals`` (P, V) and ``report``.
     """
-    return _desal.fit(ps, _options(method=method), progress)
+    return _desal.fit(ps, _table("fit", dict(method=method)), progress)
 
 
 def saliency(
@@ -118,7 +177,9 @@ def saliency(
     """
     if fit is None:
         fit = _desal.fit(ps, None, None)
-    options = _options(squared=squared, percentile=percentile, exclude=list(exclude), floor=floor)
+    if isinstance(exclude, str):
+        raise InputError(f"saliency: exclude={exclude!r} must be a list of pose names, not one str")
+    options = _table("saliency", dict(squared=squared, percentile=percentile, exclude=exclude, floor=floor))
     return _desal.saliency(ps, fit, options)
 
 
@@ -149,15 +210,18 @@ def simplify(
     Returns ``(vertices (n, 3) float64, faces (m, 3) int64, report)``; the report has the
     stage summary and ``simp_to_orig`` ((n,) int64, -1 for a moved vertex).
     """
-    options = _options(
-        target_vertices=target_vertices,
-        target_faces=target_faces,
-        ratio=ratio,
-        placement=placement,
-        balance=balance,
-        metric=metric,
-        keep_part_borders=keep_part_borders,
-        boundary_weight=boundary_weight,
+    options = _table(
+        "simplify",
+        dict(
+            target_vertices=target_vertices,
+            target_faces=target_faces,
+            ratio=ratio,
+            placement=placement,
+            balance=balance,
+            metric=metric,
+            keep_part_borders=keep_part_borders,
+            boundary_weight=boundary_weight,
+        ),
     )
     return _desal.simplify(vertices, faces, options, weights, labels, progress)
 
@@ -202,7 +266,7 @@ def simplify_pose_set(
     labels: Any = None,
     target_vertices: Optional[int] = None,
     method: str = "paper",
-    placement: str = "optimal",
+    placement: Optional[str] = None,
     template: int = 0,
     target_faces: Optional[int] = None,
     ratio: Optional[float] = None,
@@ -217,23 +281,24 @@ def simplify_pose_set(
     ``labels`` (V,) (None: parts discovered from the poses). ``method`` is ``"paper"``
     (saliency and balance), ``"qslim"``, ``"saliency"``, ``"balance"``,
     ``"multipose"`` (multi-pose QEM, subset placement), ``"desal"`` (desal's own
-    stage 3: the per-area quadric error, subset placement, no saliency; ``placement``
-    is ignored; docs/eval/desal-method.md) or ``"desal-refit"`` (desal's whole method,
+    stage 3: the per-area quadric error, subset placement, no saliency;
+    docs/eval/desal-method.md) or ``"desal-refit"`` (desal's whole method,
     the lowest deformation error on SCAPE: ``"desal"``, then again weighted where its
     mesh deforms worse than the full one under a SCAPE pose model fitted on these poses,
     keeping the vertices the model places best, then edges flipped to follow the poses;
     the mesh ``desal eval`` gives as ``desal-refit``; seconds, not milliseconds).
-    ``saliency_options`` and
-    ``simplify_options`` take the keys of a pipeline file's ``[dataset.saliency]`` and
-    ``[dataset.simplify]`` tables.
+    ``placement`` is ``"optimal"`` or ``"subset"``; unset, it is ``"optimal"``, or the
+    method's own for ``"desal"`` and ``"desal-refit"`` (which refuse another, as a
+    pipeline file does). ``saliency_options`` and ``simplify_options`` take the keys of a
+    pipeline file's ``[dataset.saliency]`` and ``[dataset.simplify]`` tables.
     """
     ps = _pose_set(poses, faces, labels, template, progress)
     simplify_table = _simplify_table(simplify_options, placement, target_vertices, target_faces, ratio)
     out = _desal.simplify_pose_set(
         ps,
-        method,
-        _options(method=fit_method),
-        json.dumps(saliency_options or {}),
+        _text("method", method),
+        _table("fit", dict(method=fit_method)),
+        _table("saliency", _options_dict("saliency", "saliency_options", saliency_options)),
         simplify_table,
         progress,
     )
@@ -274,25 +339,31 @@ def simplify_rig(
     ``JOINTS_0`` only: a subset vertex keeps its largest weights, renormalised). ``method`` is as for :func:`simplify_pose_set`. Returns the
     report (``rig``: the output's vertex, face and seam counts; ``ingest``, ``labels``,
     ``fit``, ``saliency``, ``simplify``, ``map``: each stage's). A rig that cannot be
-    read or posed raises :class:`InputError` naming the file and the element.
+    read or posed raises :class:`InputError` naming the file and the element, as does
+    ``frames`` above :data:`MAX_RIG_FRAMES` (10 000: the pose set's memory grows with
+    frames × vertices) and an ``out`` that is a folder, FIFO or socket; ``out`` is written
+    as :func:`save_graphcmr` writes.
     """
-    rig_table = _options(
-        mesh=mesh,
-        poses=poses,
-        frames=frames,
-        seed=seed,
-        max_degrees=max_degrees,
-        min_part_vertices=min_part_vertices,
-        max_influences=max_influences,
+    rig_table = _table(
+        "rig",
+        dict(
+            mesh=mesh,
+            poses=poses,
+            frames=frames,
+            seed=seed,
+            max_degrees=max_degrees,
+            min_part_vertices=min_part_vertices,
+            max_influences=max_influences,
+        ),
     )
     simplify_table = _simplify_table(simplify_options, placement, target_vertices, target_faces, ratio)
     return _desal.simplify_rig(
         rig,
         out,
         rig_table,
-        method,
-        _options(method=fit_method),
-        json.dumps(saliency_options or {}),
+        _text("method", method),
+        _table("fit", dict(method=fit_method)),
+        _table("saliency", _options_dict("saliency", "saliency_options", saliency_options)),
         simplify_table,
         progress,
     )
@@ -332,7 +403,7 @@ class Hierarchy:
 
     def save(self, path: PathArg) -> None:
         """Writes ``hierarchy.npz``, the bytes ``desal run`` writes."""
-        _desal.write_hierarchy_npz(str(path), self.arrays)
+        _desal.write_hierarchy_npz(path, self.arrays)
 
     def __repr__(self) -> str:
         return f"Hierarchy(levels={self.levels})"
@@ -348,7 +419,7 @@ def hierarchy(
     ridge: Optional[float] = None,
     neighbourhood: Optional[str] = None,
     method: str = "paper",
-    placement: str = "optimal",
+    placement: Optional[str] = None,
     template: int = 0,
     simplify_options: Optional[dict] = None,
     progress: Progress = None,
@@ -362,25 +433,36 @@ def hierarchy(
     The same as ``[dataset.hierarchy]`` in a pipeline file.
     """
     ps = _pose_set(poses, faces, labels, template, progress)
-    options = _options(
-        levels=list(levels), upsampler=upsampler, neighbours=neighbours, ridge=ridge, neighbourhood=neighbourhood
+    options = _table(
+        "hierarchy",
+        dict(levels=levels, upsampler=upsampler, neighbours=neighbours, ridge=ridge, neighbourhood=neighbourhood),
     )
     simplify_table = _simplify_table(simplify_options, placement, None, None, None)
-    arrays, report = _desal.hierarchy(ps, options, method, None, None, simplify_table, progress)
+    arrays, report = _desal.hierarchy(ps, options, _text("method", method), None, None, simplify_table, progress)
     return Hierarchy(arrays, report)
 
 
 def load_hierarchy(path: PathArg) -> Hierarchy:
-    """Reads ``hierarchy.npz`` as ``desal run`` writes it (the layout is checked)."""
-    return Hierarchy(_desal.read_hierarchy_npz(str(path)))
+    """Reads ``hierarchy.npz`` as ``desal run`` writes it (the layout is checked). Only
+    a regular file is read: a FIFO, a device or a folder raises :class:`InputError`."""
+    return Hierarchy(_desal.read_hierarchy_npz(path))
 
 
 def save_graphcmr(h: Hierarchy, path: PathArg) -> None:
     """Writes GraphCMR's own layout: object arrays of ``scipy.sparse`` CSC matrices under
     ``A``, ``D``, ``U`` and the faces under ``F``. GraphCMR's code loads it unchanged with
     ``np.load(path, allow_pickle=True, encoding="latin1")``. Needs scipy.
+
+    Written as every desal writer writes (``desal_io::write_atomic``): the whole file is
+    built in memory, written beside ``path`` and renamed over it, so a reader sees the
+    old file or the new one and an error leaves nothing behind. A symlink at ``path`` is
+    replaced by the file, its target left as it was; a character device (``/dev/null``)
+    is written through; a folder, FIFO or socket raises :class:`InputError`.
     """
     import scipy.sparse  # noqa: F401 - required: the file holds scipy matrices
+
+    if not isinstance(h, Hierarchy):
+        raise InputError(f"h: must be a desal.Hierarchy, not {type(h).__name__}")
 
     def objects(items: list) -> np.ndarray:
         out = np.empty(len(items), dtype=object)
@@ -388,8 +470,9 @@ def save_graphcmr(h: Hierarchy, path: PathArg) -> None:
             out[k] = item
         return out
 
-    with open(path, "wb") as f:
-        np.savez(f, A=objects(h.A), D=objects(h.D), U=objects(h.U), F=objects(h.faces))
+    buffer = io.BytesIO()
+    np.savez(buffer, A=objects(h.A), D=objects(h.D), U=objects(h.U), F=objects(h.faces))
+    _desal._write_file(path, buffer.getvalue())
 
 
 def run(
@@ -408,14 +491,14 @@ def run(
     that stage and the ones after it; ``progress`` shows the CLI's bars on stderr.
     """
     return _desal.run(
-        str(pipeline),
-        None if out is None else str(out),
-        force,
-        from_stage,
+        pipeline,
+        out,
+        _flag("force", force),
+        None if from_stage is None else _text("from_stage", from_stage),
         jobs,
-        None if cache_dir is None else str(cache_dir),
-        explain,
-        progress,
+        cache_dir,
+        _flag("explain", explain),
+        _flag("progress", progress),
     )
 
 

@@ -7,6 +7,7 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+MAX_RIG_FRAMES: int
 
 _Path = Union[str, PathLike[str]]
 _Progress = Optional[Callable[[str, int, int], Any]]
@@ -150,6 +151,10 @@ def load(path: _Path) -> dict:
     """A desal artifact (.dsa) as a dict of arrays and values, with kind, version and producer."""
 def read_hierarchy_npz(path: _Path) -> dict: ...
 def write_hierarchy_npz(path: _Path, arrays: dict) -> None: ...
+def _write_file(path: _Path, data: bytes) -> None:
+    """Writes ``data`` as desal's writers do (temp file and rename; devices written through)."""
+def _panic_for_tests(message: str) -> None:
+    """Panics in Rust; raises :class:`Error` (the tests' proof that no panic escapes)."""
 def read_mesh(path: _Path) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.int64]]:
     """A PLY, OBJ or OFF mesh as desal reads it: (vertices, faces)."""
 def read_labels(path: _Path) -> tuple[npt.NDArray[np.int64], list[str]]:
