@@ -233,7 +233,9 @@ pub fn execute(target: Target, iteration: u64, bytes: &[u8]) -> bool {
                 }
                 // The reader's panic guard turns a panic inside the `gltf` crate into an
                 // error; for the fuzzer it is still a finding (an accessor check missed).
-                Err(desal_rig::RigError::Panic { message, .. }) => panic!("caught by the rig reader: {message}"),
+                Err(desal_rig::RigError::Panic { message, .. }) => {
+                    panic!("caught by the rig reader: {message}")
+                }
                 Err(e) => {
                     let text = e.to_string();
                     assert!(text.contains(&*path.to_string_lossy()), "an error without the path: {text}");
