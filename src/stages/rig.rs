@@ -96,6 +96,14 @@ impl RigParams {
         if self.frames == 0 {
             bail!("rig.frames must be at least 1");
         }
+        if self.frames > desal_rig::MAX_FRAMES {
+            bail!(
+                "rig.frames = {} is more than desal's limit of {} frames per source (desal_rig::MAX_FRAMES); \
+                 the pose set's memory grows with frames x vertices",
+                self.frames,
+                desal_rig::MAX_FRAMES
+            );
+        }
         if !(self.max_degrees.is_finite() && (0.0..=180.0).contains(&self.max_degrees)) {
             bail!("rig.max_degrees = {} must lie in 0..=180", self.max_degrees);
         }

@@ -172,3 +172,22 @@ fn d17_a_fifo_as_pose_file_or_pipeline_is_refused() {
     let out = desal(&["run", fifo.to_str().unwrap(), "--quiet"]);
     assert!(!out.status.success() && stderr(&out).contains("FIFO"), "{}", stderr(&out));
 }
+
+/// D8: `rig.frames` past desal's cap is refused when the pipeline is read, before the
+/// rig is posed (a billion frames used to abort at 48 GB), and nothing is written.
+#[test]
+fn d8_a_billion_frames_are_refused_before_posing() {
+    let dir = tempfile::tempdir().unwrap();
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("data-samples/rig.glb");
+    std::fs::copy(sample, dir.path().join("avatar.glb")).unwrap();
+    let pipeline = dir.path().join("rig.toml");
+    std::fs::write(
+        &pipeline,
+        "schema = 1\nout = \"out\"\n[[dataset]]\nname = \"avatar\"\n[dataset.rig]\nfile = \"avatar.glb\"\nframes = 1000000000\n",
+    )
+    .unwrap();
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("MAX_FRAMES"), "{}", stderr(&out));
+    assert!(!dir.path().join("out/avatar").exists());
+}

@@ -33,10 +33,11 @@ use crate::errors::{Error, InputError, guard};
 use crate::progress::PyProgress;
 
 /// The most frames `simplify_rig` poses a rig at (per source: `poses="both"` gives twice
-/// as many poses). A larger count would need more memory than a pose set of that size
-/// is worth (the sample rig at 10 000 frames is 3.5 GB of positions), and a count like
-/// 10**12 would abort the interpreter in the allocator, where no error can be raised.
-pub const MAX_RIG_FRAMES: usize = 10_000;
+/// as many poses): the rig crate's one cap, which `rig.frames` in pipeline files has too.
+/// Checked here before any work, since a count like 10**12 would otherwise abort the
+/// interpreter in the allocator, where no error can be raised; the pose set's size is
+/// capped again by `desal_rig::MAX_POSE_VERTICES` once the vertex count is known.
+pub const MAX_RIG_FRAMES: usize = desal_rig::MAX_FRAMES;
 
 /// The fit table's keys as `simplify_pose_set`, `simplify_rig` and `hierarchy` name them.
 const FIT_METHOD: &[(&str, &str)] = &[("method", "fit_method")];

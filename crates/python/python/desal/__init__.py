@@ -340,8 +340,8 @@ def simplify_rig(
     report (``rig``: the output's vertex, face and seam counts; ``ingest``, ``labels``,
     ``fit``, ``saliency``, ``simplify``, ``map``: each stage's). A rig that cannot be
     read or posed raises :class:`InputError` naming the file and the element, as does
-    ``frames`` above :data:`MAX_RIG_FRAMES` (10 000: the pose set's memory grows with
-    frames × vertices) and an ``out`` that is a folder, FIFO or socket; ``out`` is written
+    ``frames`` above :data:`MAX_RIG_FRAMES` (65 536, the CLI's ``rig.frames`` limit too:
+    the pose set's memory grows with frames × vertices, capped at 2^27 positions) and an ``out`` that is a folder, FIFO or socket; ``out`` is written
     as :func:`save_graphcmr` writes.
     """
     rig_table = _table(
