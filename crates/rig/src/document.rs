@@ -9,6 +9,10 @@
 //!   whose integer attributes [`crate::accessor`] converts) are taken out of
 //!   `extensionsRequired`, which the crate refuses for any extension it does not know.
 //!
+//! - **Structure** ([`crate::structure`]): every reference between elements in range and
+//!   every enumerated value valid, checked here, since the crate's validation misses
+//!   some and panics on others.
+//!
 //! [`crate::read::read_rig_from`] catches any panic of the crate (none is expected).
 
 use std::path::Path;
@@ -49,6 +53,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, RigError> {
         serde_json::from_slice(&json).map_err(|e| gltf_error(gltf::Error::Deserialize(e)))?;
     let extensions = declared_extensions(&value);
     drop_non_object_extras(&mut value);
+    crate::structure::check(path, &value)?;
     if let Some(Value::Array(required)) = value.get_mut("extensionsRequired") {
         required.retain(|e| !e.as_str().is_some_and(|e| HANDLED_EXTENSIONS.contains(&e)));
     }

@@ -19,6 +19,11 @@ pub enum RigError {
     /// type, layout within its buffer view, sparse indices).
     #[error("{path}: accessor {accessor} ({semantic} of {used_by}): {reason}")]
     Accessor { path: PathBuf, accessor: usize, semantic: String, used_by: String, reason: String },
+    /// An element of the document refers to one the file lacks, or holds a value the
+    /// specification does not list; `element` names it by index and name (`animation 0
+    /// 'wave' channel 2`, `mesh 1 'body' primitive 0`, `accessor 4`).
+    #[error("{path}: {element}: {reason}")]
+    Structure { path: PathBuf, element: String, reason: String },
     #[error("{path}: buffer {buffer}: {reason}")]
     Buffer { path: PathBuf, buffer: usize, reason: String },
     #[error("{path}: no skinned mesh (no node has both a mesh and a skin); desal needs a rigged body")]

@@ -34,6 +34,7 @@ pub mod read;
 pub mod refit;
 pub mod seams;
 pub mod simplified;
+mod structure;
 pub mod viewer;
 pub mod weld;
 pub mod write;

@@ -1,6 +1,7 @@
 //! Reading a skinned glTF 2.0 file (`.glb` or `.gltf` with its buffers) into a [`Rig`].
-//! The `gltf` crate parses and validates the JSON (every index in range,
-//! [`crate::document`]); desal reads every accessor itself ([`crate::accessor`]), each
+//! desal checks the JSON's structure (every reference in range, every enumerated value
+//! valid: [`crate::structure`]) before the `gltf` crate parses and validates it
+//! ([`crate::document`]); desal reads every accessor itself ([`crate::accessor`]), each
 //! checked against the specification's table and its buffer before it is read, so a
 //! hostile file is refused by name and never panics, allocates at will or is misread.
 //!

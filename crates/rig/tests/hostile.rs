@@ -289,6 +289,199 @@ fn d1_a_glb_whose_header_counts_fewer_bytes_than_itself_is_refused() {
     refused(read(&bytes), &["hostile.glb: not a valid glTF 2.0 file"]);
 }
 
+// D1: references and enumerated values the `gltf` crate did not validate and panicked on
+// (a channel's target node and path, the POSITION accessor), and the rest of the
+// document's structure, refused by name before the crate reads the file.
+
+/// `f`, broken by `breaks`, is refused in both containers with a [`RigError::Structure`]
+/// whose message holds every `parts`.
+#[track_caller]
+fn structure_refused(breaks: impl Fn(&mut Value), parts: &[&str]) {
+    let mut f = Fixture::square();
+    breaks(&mut f.json);
+    for (name, bytes) in [("hostile.glb", f.glb()), ("hostile.gltf", f.embedded())] {
+        let result = read_rig_from(Path::new(name), &bytes, &ReadOptions::default());
+        assert!(matches!(result, Err(RigError::Structure { .. })), "{name}: {result:?}");
+        let message = refused(result, parts);
+        assert!(message.starts_with(&format!("{name}: ")), "{message}");
+    }
+}
+
+#[test]
+fn d1_a_channel_targeting_a_missing_node_is_refused() {
+    for node in [3u64, 255, 4_294_967_295] {
+        structure_refused(
+            |json| json["animations"][0]["channels"][1]["target"]["node"] = node.into(),
+            &["animation 0 'wave' channel 1: the target refers to node", "but the file has 3 nodes"],
+        );
+    }
+}
+
+#[test]
+fn d1_a_channel_with_a_path_gltf_does_not_define_is_refused() {
+    for path in ["matrix", "", "Rotation"] {
+        structure_refused(
+            |json| json["animations"][0]["channels"][2]["target"]["path"] = path.into(),
+            &[
+                "animation 0 'wave' channel 2",
+                &format!("path \"{path}\" is not one of translation, rotation, scale, weights"),
+            ],
+        );
+    }
+}
+
+#[test]
+fn d1_a_channel_naming_a_missing_sampler_is_refused() {
+    structure_refused(
+        |json| json["animations"][0]["channels"][0]["sampler"] = 3.into(),
+        &["animation 0 'wave' channel 0: sampler 3 does not exist; the animation has 3 samplers"],
+    );
+}
+
+#[test]
+fn d1_a_sampler_with_an_unknown_interpolation_is_refused() {
+    structure_refused(
+        |json| json["animations"][0]["samplers"][1]["interpolation"] = "SMOOTH".into(),
+        &["animation 0 'wave' sampler 1", "interpolation \"SMOOTH\" is not one of LINEAR, STEP, CUBICSPLINE"],
+    );
+    structure_refused(
+        |json| json["animations"][0]["samplers"][2]["output"] = 11.into(),
+        &["animation 0 'wave' sampler 2: output refers to accessor 11, but the file has 11 accessors"],
+    );
+}
+
+#[test]
+fn d1_a_position_past_the_accessors_is_refused() {
+    structure_refused(
+        |json| json["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 255.into(),
+        &["mesh 0 'body' primitive 0: POSITION refers to accessor 255, but the file has 11 accessors"],
+    );
+    // The crate indexed `accessors[POSITION]` while validating, before checking it.
+    structure_refused(
+        |json| json["accessors"] = json!([]),
+        &["mesh 0 'body' primitive 0", "refers to accessor", "but the file has no accessors"],
+    );
+}
+
+#[test]
+fn d1_primitive_references_past_their_arrays_are_refused() {
+    structure_refused(
+        |json| json["meshes"][0]["primitives"][0]["indices"] = 11.into(),
+        &["mesh 0 'body' primitive 0: indices refers to accessor 11"],
+    );
+    structure_refused(
+        |json| json["meshes"][0]["primitives"][0]["targets"] = json!([{"NORMAL": 40}]),
+        &["mesh 0 'body' primitive 0: morph target 0 NORMAL refers to accessor 40"],
+    );
+    structure_refused(
+        |json| json["meshes"][0]["primitives"][0]["material"] = 0.into(),
+        &["mesh 0 'body' primitive 0: material refers to material 0, but the file has no materials"],
+    );
+    structure_refused(
+        |json| json["meshes"][0]["primitives"][0]["mode"] = 7.into(),
+        &["mesh 0 'body' primitive 0: mode 7 is not a glTF primitive mode"],
+    );
+}
+
+#[test]
+fn d1_node_and_scene_references_past_their_arrays_are_refused() {
+    structure_refused(
+        |json| json["nodes"][0]["children"] = json!([1, 33]),
+        &["node 0 'root': child 1 refers to node 33, but the file has 3 nodes"],
+    );
+    structure_refused(
+        |json| json["nodes"][2]["mesh"] = 1.into(),
+        &["node 2 'body': mesh refers to mesh 1, but the file has 1 mesh"],
+    );
+    structure_refused(
+        |json| json["nodes"][2]["skin"] = 2.into(),
+        &["node 2 'body': skin refers to skin 2, but the file has 1 skin"],
+    );
+    structure_refused(
+        |json| json["nodes"][1]["camera"] = 0.into(),
+        &["node 1 'child': camera refers to camera 0, but the file has no cameras"],
+    );
+    structure_refused(
+        |json| json["scenes"][0]["nodes"] = json!([0, 2, 3]),
+        &["scene 0: node 2 refers to node 3, but the file has 3 nodes"],
+    );
+    structure_refused(
+        |json| json["scene"] = 1.into(),
+        &["the file: scene refers to scene 1, but the file has 1 scene"],
+    );
+}
+
+#[test]
+fn d1_skin_references_past_their_arrays_are_refused() {
+    structure_refused(
+        |json| json["skins"][0]["joints"] = json!([0, 65535]),
+        &["skin 0 'skin': joint 1 refers to node 65535, but the file has 3 nodes"],
+    );
+    structure_refused(
+        |json| json["skins"][0]["inverseBindMatrices"] = 99.into(),
+        &["skin 0 'skin': inverseBindMatrices refers to accessor 99"],
+    );
+    structure_refused(
+        |json| json["skins"][0]["skeleton"] = 3.into(),
+        &["skin 0 'skin': skeleton refers to node 3"],
+    );
+}
+
+#[test]
+fn d1_accessor_and_buffer_view_references_past_their_arrays_are_refused() {
+    structure_refused(
+        |json| json["accessors"][TIMES]["bufferView"] = 11.into(),
+        &["accessor 7: bufferView refers to buffer view 11, but the file has 11 buffer views"],
+    );
+    structure_refused(
+        |json| json["bufferViews"][4]["buffer"] = 1.into(),
+        &["buffer view 4: buffer refers to buffer 1, but the file has 1 buffer"],
+    );
+    structure_refused(
+        |json| {
+            json["accessors"][NORMAL]["sparse"] = json!({
+                "count": 1,
+                "indices": {"bufferView": 20, "componentType": UNSIGNED_BYTE},
+                "values": {"bufferView": 0}
+            })
+        },
+        &["accessor 1: the sparse indices' bufferView refers to buffer view 20"],
+    );
+    structure_refused(
+        |json| {
+            json["accessors"][NORMAL]["name"] = "normals".into();
+            json["accessors"][NORMAL]["sparse"] = json!({
+                "count": 1,
+                "indices": {"bufferView": 0, "componentType": UNSIGNED_BYTE},
+                "values": {"bufferView": 12}
+            })
+        },
+        &["accessor 1 'normals': the sparse values' bufferView refers to buffer view 12"],
+    );
+}
+
+#[test]
+fn d1_accessor_types_gltf_does_not_define_are_refused() {
+    structure_refused(
+        |json| json["accessors"][POSITION]["type"] = "VEC5".into(),
+        &["accessor 0: type \"VEC5\" is not one of SCALAR, VEC2, VEC3, VEC4, MAT2, MAT3, MAT4"],
+    );
+    structure_refused(
+        |json| json["accessors"][SCALES]["componentType"] = 5124.into(),
+        &["accessor 10: componentType 5124 is not one of 5120, 5121, 5122, 5123, 5125, 5126"],
+    );
+    structure_refused(
+        |json| {
+            json["accessors"][NORMAL]["sparse"] = json!({
+                "count": 1,
+                "indices": {"bufferView": 0, "componentType": FLOAT},
+                "values": {"bufferView": 0}
+            })
+        },
+        &["accessor 1: the sparse indices' componentType 5126 is not one of 5121, 5123, 5125"],
+    );
+}
+
 // D2: sparse accessors sized by their count, not by the file.
 
 /// POSITION as zeros plus sparse values at `indices`, without a buffer view.
