@@ -5,6 +5,9 @@
 //! - **`extras`** may be any JSON value (glTF 2.0 §3.2 "extras"), but the crate, built
 //!   without its `extras` feature, accepts only objects and would refuse the whole file;
 //!   desal never reads `extras`, so every `extras` that is not an object is dropped.
+//! - **Application-specific attributes** (`_BATCHID`, glTF 2.0 §3.7.2.1: names starting
+//!   with `_`) are valid glTF, but the crate, without its `extras` feature, refuses the
+//!   whole file for one; desal never reads them, so they are dropped from each primitive.
 //! - **Extensions desal reads itself** ([`HANDLED_EXTENSIONS`]: `KHR_mesh_quantization`,
 //!   whose integer attributes [`crate::accessor`] converts) are taken out of
 //!   `extensionsRequired`, which the crate refuses for any extension it does not know.
@@ -53,6 +56,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, RigError> {
         serde_json::from_slice(&json).map_err(|e| gltf_error(gltf::Error::Deserialize(e)))?;
     let extensions = declared_extensions(&value);
     drop_non_object_extras(&mut value);
+    drop_application_attributes(&mut value);
     crate::structure::check(path, &value)?;
     if let Some(Value::Array(required)) = value.get_mut("extensionsRequired") {
         required.retain(|e| !e.as_str().is_some_and(|e| HANDLED_EXTENSIONS.contains(&e)));
@@ -71,6 +75,24 @@ fn declared_extensions(value: &Value) -> Vec<String> {
         .flatten()
         .filter_map(|e| e.as_str().map(str::to_owned))
         .collect()
+}
+
+/// Removes the application-specific attributes (names starting with `_`) of every mesh
+/// primitive, and of its morph targets.
+fn drop_application_attributes(value: &mut Value) {
+    let Some(Value::Array(meshes)) = value.get_mut("meshes") else { return };
+    let primitives = meshes.iter_mut().filter_map(|m| m.get_mut("primitives")?.as_array_mut()).flatten();
+    for primitive in primitives {
+        let Some(primitive) = primitive.as_object_mut() else { continue };
+        if let Some(Value::Object(attributes)) = primitive.get_mut("attributes") {
+            attributes.retain(|name, _| !name.starts_with('_'));
+        }
+        if let Some(Value::Array(targets)) = primitive.get_mut("targets") {
+            for target in targets.iter_mut().filter_map(Value::as_object_mut) {
+                target.retain(|name, _| !name.starts_with('_'));
+            }
+        }
+    }
 }
 
 /// Removes every `extras` whose value is not an object, at any depth (not descending

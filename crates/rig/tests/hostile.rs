@@ -906,6 +906,17 @@ fn d12_extras_that_are_not_objects_are_accepted() {
     );
 }
 
+/// Application-specific attributes (`_BATCHID`: names starting with `_`) are valid glTF
+/// and are ignored, as `extras` are, instead of refusing the file.
+#[test]
+fn d12_application_specific_attributes_are_accepted() {
+    let plain = read(&Fixture::square().glb()).unwrap();
+    let mut f = Fixture::square();
+    f.json["meshes"][0]["primitives"][0]["attributes"]["_BATCHID"] = POSITION.into();
+    f.json["meshes"][0]["primitives"][0]["attributes"]["_FOO"] = 9999.into();
+    assert_eq!(read(&f.glb()).unwrap(), plain);
+}
+
 // D17: the rig file itself must be a regular file.
 
 #[cfg(unix)]
