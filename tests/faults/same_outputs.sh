@@ -4,7 +4,7 @@
 # Runs `desal run` on the sample, the sample hierarchy, the rig sample and SCAPE (../shared
 # beside the checkout) and `desal eval` on the sample with each binary, then compares the
 # SHA-256 of every .dsa, .ply, .png, .txt, .npz and .glb file they wrote, and every JSON
-# file with its timing fields (keys ending in `seconds`) removed and the output folder's
+# file with its timing fields (keys ending in `seconds`, `timings` objects, timings quoted in notes) removed and the output folder's
 # path replaced by OUT.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -21,14 +21,15 @@ hashes() {
       -o -name '*.txt' -o -name '*.npz' -o -name '*.glb' \) -print | sort | xargs sha256sum)
   (cd "$out" && find . -path ./.cache -prune -o -type f -name '*.json' -print | sort | while read -r f; do
     python3 - "$f" "$out" <<'PY'
-import json, sys
+import json, re, sys
 def strip(v):
     if isinstance(v, dict):
-        return {k: strip(x) for k, x in v.items() if not k.endswith("seconds")}
+        return {k: strip(x) for k, x in v.items() if not k.endswith("seconds") and k != "timings"}
     if isinstance(v, list):
         return [strip(x) for x in v]
     if isinstance(v, str):
-        return v.replace(sys.argv[2], "OUT")
+        # Notes quote their timings ("42.2 ms").
+        return re.sub(r"\b[0-9]+(\.[0-9]+)? ?(ms|s)\b", "TIME", v.replace(sys.argv[2], "OUT"))
     return v
 text = json.dumps(strip(json.load(open(sys.argv[1]))), sort_keys=True)
 import hashlib
