@@ -211,9 +211,10 @@ pub enum PoseSource {
 pub const MAX_FRAMES: usize = 1 << 16;
 
 /// Most vertex positions a posed rig may hold: poses (the bind pose included) × welded
-/// vertices, refused by [`crate::pose_rig`] before anything is allocated. 2^27 positions
-/// are 3 GiB as `f64`, and every later stage holds the pose set again.
-pub const MAX_POSE_VERTICES: usize = 1 << 27;
+/// vertices, refused by [`crate::pose_rig`] before anything is allocated. Ingest peaks at
+/// about 47 bytes a position (measured: the rig sample at 2000 frames, 1.28 GB), so 2^25
+/// positions stay near 1.6 GB (the rig sample at up to 2311 frames; SCAPE is 0.9 M).
+pub const MAX_POSE_VERTICES: usize = 1 << 25;
 
 /// Most node local poses the sampled frames may hold: frames × nodes, refused by
 /// [`sample_frames`] before sampling. 2^23 local poses are about 1.1 GiB.

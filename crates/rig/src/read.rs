@@ -38,8 +38,17 @@ pub const WEIGHT_SUM_TOLERANCE: f64 = 1e-3;
 /// one this short has no direction to normalise to.
 pub const MIN_ROTATION_LENGTH: f64 = 1e-6;
 
-/// The largest external buffer file read (glTF's GLB container counts bytes in `u32`).
-pub const MAX_BUFFER_BYTES: u64 = 1 << 32;
+/// The most bytes a file's buffers may hold together (the GLB chunk, `data:` URIs and
+/// files beside it): 2 GiB, far above any avatar, and checked as each buffer is read, so
+/// a small glTF naming one file thousands of times is refused instead of reading it each
+/// time.
+pub const MAX_BUFFER_BYTES: u64 = 1 << 31;
+
+/// The most keyframe values (times and output components, over every channel of every
+/// animation) a file may make desal decode: 2^26 `f32`s, 256 MiB. Counted from the
+/// accessors' declared counts before any is decoded, since channels may share one large
+/// accessor.
+pub const MAX_KEYFRAME_VALUES: u64 = 1 << 26;
 
 /// The `KHR_mesh_quantization` extension: integer positions, normals and UVs.
 const MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
@@ -106,6 +115,7 @@ impl Reader<'_> {
         let mesh = self.read_mesh(&mesh, &skin)?;
         let scenes = self.document.scenes().map(|s| s.nodes().map(|n| n.index()).collect()).collect();
         let scene = self.document.default_scene().map(|s| s.index());
+        self.check_keyframe_total()?;
         let animations =
             self.document.animations().map(|a| self.read_animation(&a)).collect::<Result<_, _>>()?;
         let rig = Rig { nodes, scenes, scene, mesh_node, skin, animations, mesh };
@@ -411,6 +421,29 @@ impl Reader<'_> {
         Ok(Node { name, children: node.children().map(|c| c.index()).collect(), transform })
     }
 
+    /// Refuses a file whose channels together would decode more than
+    /// [`MAX_KEYFRAME_VALUES`] values, before any is decoded.
+    fn check_keyframe_total(&self) -> Result<(), RigError> {
+        let values = |a: gltf::Accessor<'_>| a.count() as u64 * a.dimensions().multiplicity() as u64;
+        let total: u64 = self
+            .document
+            .animations()
+            .flat_map(|a| a.channels().collect::<Vec<_>>())
+            .map(|c| values(c.sampler().input()).saturating_add(values(c.sampler().output())))
+            .fold(0u64, u64::saturating_add);
+        if total > MAX_KEYFRAME_VALUES {
+            return Err(RigError::Structure {
+                path: self.path.clone(),
+                element: "animations".into(),
+                reason: format!(
+                    "their channels hold {total} keyframe values together, more than desal's limit of \
+                     {MAX_KEYFRAME_VALUES} (desal_rig::read::MAX_KEYFRAME_VALUES)"
+                ),
+            });
+        }
+        Ok(())
+    }
+
     fn read_animation(&self, animation: &gltf::Animation<'_>) -> Result<Animation, RigError> {
         let name = animation.name().map(str::to_owned);
         let label = name.clone().unwrap_or_else(|| format!("animation {}", animation.index()));
@@ -565,12 +598,44 @@ fn flatten_matrix(m: [[f32; 4]; 4]) -> [f32; 16] {
 /// regular file inside `path`'s folder (percent-decoded, symlinks resolved; anything
 /// else refused by [`desal_io::confine::read_inside`]).
 fn load_buffers(path: &Path, document: &Document, blob: Option<&[u8]>) -> Result<Vec<Vec<u8>>, RigError> {
+    // The declared lengths first, so that a file naming one buffer file thousands of
+    // times is refused before any of them is read.
+    let mut declared = 0u64;
+    for buffer in document.buffers() {
+        declared = declared.saturating_add(buffer.length() as u64);
+        if declared > MAX_BUFFER_BYTES {
+            return Err(RigError::Buffer {
+                path: path.to_owned(),
+                buffer: buffer.index(),
+                reason: format!(
+                    "the buffers up to this one declare {declared} bytes together, more than desal's limit \
+                     of {MAX_BUFFER_BYTES} (desal_rig::read::MAX_BUFFER_BYTES)"
+                ),
+            });
+        }
+    }
     let mut out = Vec::new();
+    let mut total = 0u64;
     for buffer in document.buffers() {
         let bad = |reason: String| RigError::Buffer { path: path.to_owned(), buffer: buffer.index(), reason };
+        let room = MAX_BUFFER_BYTES.saturating_sub(total);
+        let too_many = || {
+            bad(format!(
+                "the file's buffers hold more than {MAX_BUFFER_BYTES} bytes together, desal's limit \
+                 (desal_rig::read::MAX_BUFFER_BYTES)"
+            ))
+        };
+        if buffer.length() as u64 > room {
+            return Err(too_many());
+        }
         let data = match buffer.source() {
             gltf::buffer::Source::Bin => {
-                blob.ok_or_else(|| bad("refers to the GLB binary chunk, which is missing".into()))?.to_vec()
+                let blob =
+                    blob.ok_or_else(|| bad("refers to the GLB binary chunk, which is missing".into()))?;
+                if blob.len() as u64 > room {
+                    return Err(too_many());
+                }
+                blob.to_vec()
             }
             gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
                 let (_, encoded) =
@@ -579,13 +644,14 @@ fn load_buffers(path: &Path, document: &Document, blob: Option<&[u8]>) -> Result
             }
             // A regular file inside the glTF's own folder, or nothing (desal_io's one rule
             // for paths found inside data).
-            gltf::buffer::Source::Uri(uri) => desal_io::confine::read_inside(
-                path,
-                &format!("buffer {}", buffer.index()),
-                uri,
-                MAX_BUFFER_BYTES,
-            )?,
+            gltf::buffer::Source::Uri(uri) => {
+                desal_io::confine::read_inside(path, &format!("buffer {}", buffer.index()), uri, room)?
+            }
         };
+        total += data.len() as u64;
+        if total > MAX_BUFFER_BYTES {
+            return Err(too_many());
+        }
         if data.len() < buffer.length() {
             return Err(bad(format!("declares {} bytes but holds {}", buffer.length(), data.len())));
         }
