@@ -409,8 +409,18 @@ impl Cache {
             bail!("{} is not a folder, so not a desal cache", root.display());
         }
         let _ = meta;
-        if fs::symlink_metadata(root.join(MARKER)).is_ok_and(|m| m.is_file()) {
-            return Ok(());
+        let marker = root.join(MARKER);
+        if fs::symlink_metadata(&marker).is_ok_and(|m| m.is_file()) {
+            // Other tools (cargo, borg, …) write the same standard tag: only desal's counts.
+            let text = desal_io::file::read_regular_file(&marker).unwrap_or_default();
+            if text.starts_with(MARKER_TEXT.as_bytes()) {
+                return Ok(());
+            }
+            bail!(
+                "{} is not a desal cache: its {MARKER} was written by another tool; `desal cache gc` deletes only \
+                 inside a desal cache: check --cache-dir",
+                root.display()
+            );
         }
         let not_ours = |what: &Path, why: &str| {
             anyhow::anyhow!(
@@ -510,16 +520,22 @@ impl Cache {
     }
 }
 
+/// The files a cache entry holds ([`Cache::store`]).
+const ENTRY_FILES: [&str; 3] = ["artifact.dsa", "summary.json", "key.json"];
+
 /// Whether `entry`, in the stage folder `stage`, is a desal cache entry: a folder (not a
-/// symlink) holding only regular files, whose `key.json` is a key of that stage that
-/// hashes to the entry's name.
+/// symlink) holding only regular files that [`Cache::store`] writes, whose `key.json` is a
+/// key of that stage that hashes to the entry's name.
 fn is_entry(stage: &str, entry: &fs::DirEntry) -> bool {
     if !entry.file_type().is_ok_and(|t| t.is_dir()) {
         return false;
     }
     let dir = entry.path();
     let Ok(files) = fs::read_dir(&dir) else { return false };
-    if !files.flatten().all(|f| f.file_type().is_ok_and(|t| t.is_file())) {
+    let ours = |f: &fs::DirEntry| {
+        f.file_type().is_ok_and(|t| t.is_file()) && ENTRY_FILES.iter().any(|name| f.file_name() == *name)
+    };
+    if !files.flatten().all(|f| ours(&f)) {
         return false;
     }
     let key_file = dir.join("key.json");

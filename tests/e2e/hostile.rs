@@ -191,3 +191,49 @@ fn d8_a_billion_frames_are_refused_before_posing() {
     assert!(stderr(&out).contains("MAX_FRAMES"), "{}", stderr(&out));
     assert!(!dir.path().join("out/avatar").exists());
 }
+
+/// D6: a `CACHEDIR.TAG` another tool wrote (cargo, borg, …) does not make a folder a desal
+/// cache: gc refuses it and writes nothing there.
+#[test]
+fn d6_another_tools_cachedir_tag_is_not_a_desal_cache() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = write_tube_dataset(dir.path(), "");
+    let other = dir.path().join("other");
+    std::fs::create_dir_all(other.join("photos")).unwrap();
+    std::fs::write(other.join("photos/a.jpg"), "precious").unwrap();
+    std::fs::write(
+        other.join("CACHEDIR.TAG"),
+        "Signature: 8a477f597d28d172789f06886806bc55\n# by another tool\n",
+    )
+    .unwrap();
+    let before = tree(&other);
+    let out = desal(&["cache", "gc", pipeline.to_str().unwrap(), "--cache-dir", other.to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("another tool"), "{}", stderr(&out));
+    assert_eq!(tree(&other), before);
+}
+
+/// Results on standard output: a full device is a clean error naming standard output,
+/// a closed pipe ends quietly; neither is a panic (exit 101).
+#[test]
+fn standard_output_that_cannot_be_written_is_an_error_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = write_tube_dataset(dir.path(), "");
+    run_ok(&pipeline, &[]);
+    let poses = dir.path().join("out/tube/poses.dsa");
+    let inspect = || {
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_desal"));
+        command.args(["inspect", poses.to_str().unwrap()]);
+        command
+    };
+    let full = std::fs::OpenOptions::new().write(true).open("/dev/full").unwrap();
+    let out = inspect().stdout(full).output().unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("standard output"), "{}", stderr(&out));
+    let mut child =
+        inspect().stdout(std::process::Stdio::piped()).stderr(std::process::Stdio::piped()).spawn().unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    assert_ne!(out.status.code(), Some(101), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("panicked"), "{}", stderr(&out));
+}
