@@ -333,7 +333,7 @@ pub fn simplify(args: &SimplifyArgs) -> Result<()> {
     desal_io::ply::write_ply(&args.output, &simplified.mesh, &desal_io::ply::PlyWriteOptions::default())?;
     eprintln!("{}", simplified.report);
     if args.repeat.is_some() {
-        println!("SIMPLIFY_SECONDS={best}");
+        crate::print_out(&format!("SIMPLIFY_SECONDS={best}\n"))?;
     }
     Ok(())
 }

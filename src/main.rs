@@ -118,8 +118,7 @@ fn run(cli: Cli) -> Result<()> {
             };
             let pipeline = desal::pipeline::load(&pipeline, out.as_deref())?;
             let reports = desal::run::run(&pipeline, &options)?;
-            print!("{}", desal::run::summary_table(&reports));
-            Ok(())
+            desal::print_out(&desal::run::summary_table(&reports))
         }
         Command::Parts(args) => desal::cli::parts(&args),
         Command::Fit(args) => desal::cli::fit(&args),
@@ -145,12 +144,11 @@ fn run(cli: Cli) -> Result<()> {
             // `desal eval`'s floors of these pose sets and labels are kept too.
             let inputs = runs.iter().flat_map(|r| [r.stages.poses.hash, r.stages.labels.hash]).collect();
             let (kept, removed, freed) = cache.gc(&keep, desal::evaluate::floor::STAGE, &inputs)?;
-            println!(
-                "{}: kept {kept} entries, removed {removed} ({:.1} MB)",
+            desal::print_out(&format!(
+                "{}: kept {kept} entries, removed {removed} ({:.1} MB)\n",
                 cache.root().display(),
                 freed as f64 / 1e6
-            );
-            Ok(())
+            ))
         }
         Command::Inspect { files } => {
             // Every file is described or its error printed; the exit code says whether
@@ -158,7 +156,7 @@ fn run(cli: Cli) -> Result<()> {
             let mut failed = 0;
             for file in &files {
                 match desal::inspect::describe(file) {
-                    Ok(text) => print!("{text}"),
+                    Ok(text) => desal::print_out(&text)?,
                     Err(e) => {
                         desal::report_error(&e);
                         failed += 1;

@@ -163,7 +163,7 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
         let dataset = &pipeline.datasets[*dataset];
         let dir = evaluate_dataset(&pipeline, dataset, stages, &methods, &sweep_methods, args)
             .with_context(|| format!("evaluating dataset '{}'", dataset.spec.name))?;
-        println!("{}: {}", dataset.spec.name, dir.join("eval.md").display());
+        crate::print_out(&format!("{}: {}\n", dataset.spec.name, dir.join("eval.md").display()))?;
     }
     Ok(())
 }
