@@ -385,10 +385,12 @@ const MARKER_TEXT: &str = "Signature: 8a477f597d28d172789f06886806bc55\n\
     # Everything in this folder can be recomputed; `desal cache gc` tidies it.\n";
 
 impl Cache {
-    /// Writes the marker at the root, once (every store calls it).
+    /// Writes the marker at the root, once (every store calls it). A run killed while
+    /// writing it left a temp file beside it, removed first.
     fn mark(&self) -> Result<()> {
         let marker = self.root.join(MARKER);
         if !marker.is_file() {
+            desal_io::dir::remove_leftovers(&self.root);
             desal_io::write_atomic(&marker, MARKER_TEXT.as_bytes())?;
         }
         Ok(())
