@@ -33,7 +33,7 @@ pub enum WriteTarget {
 }
 
 /// Rule 3: how a write to `path` may go. A directory, FIFO, socket or block device (or
-/// a symlink to one) is refused with [`IoError::NotAFile`], before anything is written.
+/// a symlink to one) is refused with [`IoError::NotWritable`], before anything is written.
 pub fn write_target(path: &Path) -> Result<WriteTarget, IoError> {
     let Ok(meta) = std::fs::metadata(path) else { return Ok(WriteTarget::Replace) };
     let file_type = meta.file_type();
@@ -47,7 +47,7 @@ pub fn write_target(path: &Path) -> Result<WriteTarget, IoError> {
             return Ok(WriteTarget::Device);
         }
     }
-    Err(IoError::NotAFile { path: path.to_owned(), what: crate::file::describe_type(&file_type) })
+    Err(IoError::NotWritable { path: path.to_owned(), what: crate::file::describe_type(&file_type) })
 }
 
 /// Rule 1: the regular file that `uri`, found inside the file `source`, names: relative to

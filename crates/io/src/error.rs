@@ -28,6 +28,13 @@ pub enum IoError {
     #[error("{path}: unsupported mesh format '.{extension}' (desal reads .ply, .obj and .off)")]
     UnsupportedFormat { path: PathBuf, extension: String },
 
+    /// An output path that desal may not replace: a directory, FIFO, socket or block
+    /// device (a character device is written through; see `confine::write_target`).
+    #[error(
+        "{path}: is {what}; desal replaces only regular files (and writes through to a character device such as /dev/null)"
+    )]
+    NotWritable { path: PathBuf, what: &'static str },
+
     /// The file is not a well-formed mesh file (bad header, truncated payload, missing
     /// properties).
     #[error("{path}: not a readable mesh: {reason}")]

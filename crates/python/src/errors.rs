@@ -60,6 +60,8 @@ fn is_input_io(error: &IoError) -> bool {
     match error {
         IoError::Io { cause, .. } => cause.kind() == std::io::ErrorKind::NotFound,
         IoError::NotAFile { .. }
+        | IoError::NotWritable { .. }
+        | IoError::Confined { .. }
         | IoError::NotText { .. }
         | IoError::UnsupportedFormat { .. }
         | IoError::BadMesh { .. }
