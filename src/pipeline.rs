@@ -292,6 +292,19 @@ fn check_dataset_name(name: &str) -> Result<()> {
              not starting with '.'"
         );
     }
+    // Folder names Windows cannot hold (a trailing dot is dropped there, so `a.` and `a`
+    // would share a folder; CON, NUL, COM1 … are devices, with any extension).
+    let stem = name.split('.').next().unwrap_or(name).to_ascii_uppercase();
+    let device = matches!(stem.as_str(), "CON" | "PRN" | "AUX" | "NUL")
+        || ((stem.starts_with("COM") || stem.starts_with("LPT"))
+            && stem.len() == 4
+            && stem.as_bytes()[3].is_ascii_digit());
+    if name.ends_with('.') || device {
+        bail!(
+            "dataset name {name:?} cannot be a folder name on every system (a trailing '.' or a device name \
+             like CON or COM1); choose another"
+        );
+    }
     if name.len() > MAX_DATASET_NAME {
         bail!(
             "dataset name '{name}' is {} characters long; at most {MAX_DATASET_NAME} are allowed",
@@ -435,6 +448,13 @@ target_vertices = 50
         let long = "a".repeat(300);
         let err = format!("{:#}", parse(p, &format!("schema = 1\n{}", dataset(&long)), None).unwrap_err());
         assert!(err.contains("300 characters"), "{err}");
+        for bad in ["a.", "con", "NUL.txt", "com1", "Lpt9"] {
+            let err = format!("{:#}", parse(p, &format!("schema = 1\n{}", dataset(bad)), None).unwrap_err());
+            assert!(err.contains("on every system"), "{bad}: {err}");
+        }
+        for fine in ["console", "com", "a.b", "nul1"] {
+            assert!(parse(p, &format!("schema = 1\n{}", dataset(fine)), None).is_ok(), "{fine}");
+        }
         let ok = "a".repeat(MAX_DATASET_NAME);
         assert!(parse(p, &format!("schema = 1\n{}", dataset(&ok)), None).is_ok());
     }
