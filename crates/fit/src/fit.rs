@@ -11,12 +11,13 @@
 //! Parallel collects preserve order and every sum runs in vertex order, so the output
 //! is bit-identical whatever the thread count.
 
-use desal_mesh::math::{Mat3, Real, Vec3};
+use desal_mesh::math::{Real, Vec3};
 use desal_mesh::{MeshError, PartLabels, PoseSet, Progress};
 use rayon::prelude::*;
 
 use crate::align::{PairMoments, solve_affine, solve_rigid};
 use crate::error::FitError;
+pub use crate::part_fit::PartFit;
 use crate::summary::{FitSummary, summarise};
 
 /// Which family of transforms is fitted per part.
@@ -79,34 +80,6 @@ pub struct FitConfig {
 impl Default for FitConfig {
     fn default() -> Self {
         Self { model: FitModel::Rigid, degenerate_ratio: 1e-9 }
-    }
-}
-
-/// The fit of one part onto one pose, with its residual statistics.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PartFit {
-    /// The linear part: a proper rotation for [`FitModel::Rigid`].
-    pub linear: Mat3,
-    /// The translation, in mesh units.
-    pub translation: Vec3,
-    /// Root mean square of the part's vertex residuals, in mesh units.
-    pub rms: Real,
-    /// Mean of the part's vertex residuals, in mesh units.
-    pub mean: Real,
-    /// Largest of the part's vertex residuals, in mesh units.
-    pub max: Real,
-}
-
-impl PartFit {
-    /// The exact fit of a pose onto itself.
-    fn identity() -> Self {
-        Self { linear: Mat3::identity(), translation: Vec3::zeros(), rms: 0.0, mean: 0.0, max: 0.0 }
-    }
-
-    /// The image of template point `p`.
-    #[inline]
-    pub fn apply(&self, p: &Vec3) -> Vec3 {
-        self.linear * p + self.translation
     }
 }
 

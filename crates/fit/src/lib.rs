@@ -15,6 +15,7 @@
 pub mod align;
 pub mod error;
 pub mod fit;
+pub mod part_fit;
 pub mod summary;
 
 pub use align::{

@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 
 use desal_mesh::math::Real;
 
-use crate::fit::PartFit;
+use crate::part_fit::PartFit;
 
 /// Residual statistics over the non-template poses, in mesh units.
 #[derive(Debug, Clone, PartialEq)]

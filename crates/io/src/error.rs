@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use desal_mesh::MeshError;
 use thiserror::Error;
 
-use crate::artifact::HEADER_LEN;
+use crate::artifact::layout::HEADER_LEN;
 
 #[derive(Debug, Error)]
 pub enum IoError {

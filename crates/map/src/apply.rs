@@ -6,7 +6,7 @@ use desal_mesh::{Face, PartLabels, PoseSet, Vec3};
 use rayon::prelude::*;
 
 use crate::error::MapError;
-use crate::greedy::squared_distance;
+use crate::kdtree::squared_distance;
 use crate::vertex_map::VertexMap;
 
 /// Simplifies every pose of `poses` with `map`.

@@ -27,15 +27,8 @@ use rayon::prelude::*;
 use crate::MapConfig;
 use crate::error::MapError;
 use crate::kdtree::KdTree;
+pub use crate::kdtree::squared_distance;
 use crate::vertex_map::VertexMap;
-
-/// The squared Euclidean distance both implementations compare, computed in one fixed
-/// order so that equal inputs give bit-equal distances and ties are seen alike.
-#[inline]
-pub fn squared_distance(a: &Vec3, b: &Vec3) -> f64 {
-    let (dx, dy, dz) = (a.x - b.x, a.y - b.y, a.z - b.z);
-    dx * dx + dy * dy + dz * dz
-}
 
 /// A (simplified, original) pair with its squared distance, ordered by
 /// `(dist2, simp_idx, orig_idx)`: the greedy rule takes the smallest free pair.

@@ -17,7 +17,13 @@ use std::collections::BinaryHeap;
 
 use desal_mesh::Vec3;
 
-use crate::greedy::squared_distance;
+/// The squared Euclidean distance both implementations compare, computed in one fixed
+/// order so that equal inputs give bit-equal distances and ties are seen alike.
+#[inline]
+pub fn squared_distance(a: &Vec3, b: &Vec3) -> f64 {
+    let (dx, dy, dz) = (a.x - b.x, a.y - b.y, a.z - b.z);
+    dx * dx + dy * dy + dz * dz
+}
 
 /// Points per leaf. Small leaves keep k = 8 queries cheap; the value only affects speed.
 const LEAF_SIZE: usize = 16;

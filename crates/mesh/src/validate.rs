@@ -3,7 +3,6 @@
 
 use crate::error::MeshError;
 use crate::math::Vec3;
-use crate::mesh::Face;
 
 /// Fails on the first non-finite coordinate, naming the pose and vertex.
 pub fn check_finite(positions: &[Vec3], pose: &str) -> Result<(), MeshError> {
@@ -17,7 +16,7 @@ pub fn check_finite(positions: &[Vec3], pose: &str) -> Result<(), MeshError> {
 }
 
 /// Fails on the first face index that is `>= vertex_count`.
-pub fn check_face_indices(faces: &[Face], vertex_count: usize) -> Result<(), MeshError> {
+pub fn check_face_indices(faces: &[[u32; 3]], vertex_count: usize) -> Result<(), MeshError> {
     for (face, f) in faces.iter().enumerate() {
         if let Some(&vertex) = f.iter().find(|&&v| v as usize >= vertex_count) {
             return Err(MeshError::FaceIndexOutOfRange { face, vertex, vertex_count });
@@ -28,7 +27,11 @@ pub fn check_face_indices(faces: &[Face], vertex_count: usize) -> Result<(), Mes
 
 /// Fails when `pose_faces` differs from `template_faces`, naming the first differing
 /// face (or the first face one list has and the other lacks).
-pub fn check_same_faces(template_faces: &[Face], pose_faces: &[Face], pose: &str) -> Result<(), MeshError> {
+pub fn check_same_faces(
+    template_faces: &[[u32; 3]],
+    pose_faces: &[[u32; 3]],
+    pose: &str,
+) -> Result<(), MeshError> {
     let n = template_faces.len().max(pose_faces.len());
     for face in 0..n {
         let expected = template_faces.get(face).copied();
@@ -59,7 +62,7 @@ impl FaceCleanup {
 
 /// The vertices (of `vertex_count`) that `faces` use, in index order, and `faces`
 /// renumbered onto them.
-pub fn used_vertices(vertex_count: usize, faces: &[Face]) -> (Vec<u32>, Vec<Face>) {
+pub fn used_vertices(vertex_count: usize, faces: &[[u32; 3]]) -> (Vec<u32>, Vec<[u32; 3]>) {
     let mut new_index = vec![u32::MAX; vertex_count];
     for &v in faces.iter().flatten() {
         new_index[v as usize] = 0;
@@ -76,7 +79,7 @@ pub fn used_vertices(vertex_count: usize, faces: &[Face]) -> (Vec<u32>, Vec<Face
 
 /// Removes faces with a repeated vertex and faces that repeat an earlier face's vertex
 /// set, keeping the order of the rest. Returns the kept faces and what was removed.
-pub fn clean_faces(faces: &[Face]) -> (Vec<Face>, FaceCleanup) {
+pub fn clean_faces(faces: &[[u32; 3]]) -> (Vec<[u32; 3]>, FaceCleanup) {
     let mut report = FaceCleanup::default();
     let mut keys: Vec<([u32; 3], usize)> = faces
         .iter()
@@ -111,7 +114,7 @@ pub fn clean_faces(faces: &[Face]) -> (Vec<Face>, FaceCleanup) {
 mod tests {
     use super::*;
 
-    /// Face 1 repeats face 0 reversed, face 2 repeats a vertex: both go, in order.
+    /// [u32; 3] 1 repeats face 0 reversed, face 2 repeats a vertex: both go, in order.
     #[test]
     fn clean_faces_reports_degenerate_and_duplicate() {
         let (kept, report) = clean_faces(&[[0, 1, 2], [2, 1, 0], [3, 3, 1], [1, 2, 3]]);

@@ -53,15 +53,14 @@ pub struct SourceAssets {
     /// Vertex groups: name → inclusive `[first, last]` base-mesh vertex ranges.
     pub groups: BTreeMap<String, Vec<[u32; 2]>>,
     /// The base mesh's texture coordinates and the UV corners of its triangles.
-    pub uvs: crate::rig::ObjUvs,
+    pub uvs: ObjUvs,
 }
 
 impl SourceAssets {
     /// Reads the four asset files from `dir` (see the `*_FILE` constants).
     pub fn load(dir: &Path) -> Result<Self, SampleError> {
         let base = desal_io::read_mesh(&dir.join(BASE_MESH_FILE))?;
-        let uvs =
-            crate::rig::parse_obj_uvs(&read_text(&dir.join(BASE_MESH_FILE))?, &dir.join(BASE_MESH_FILE))?;
+        let uvs = parse_obj_uvs(&read_text(&dir.join(BASE_MESH_FILE))?, &dir.join(BASE_MESH_FILE))?;
         let rig = parse_rig(&read_text(&dir.join(RIG_FILE))?, &dir.join(RIG_FILE))?;
         let weights = parse_weights(&read_text(&dir.join(WEIGHTS_FILE))?, &dir.join(WEIGHTS_FILE))?;
         let groups = parse_groups(&read_text(&dir.join(GROUPS_FILE))?, &dir.join(GROUPS_FILE))?;
@@ -143,4 +142,63 @@ pub fn parse_groups(text: &str, path: &Path) -> Result<BTreeMap<String, Vec<[u32
 /// this crate's manifest at compile time.
 pub fn repository_source_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../data-samples/source")
+}
+
+/// Texture coordinates of the base mesh: `uvs[vt]`, and per triangle of the
+/// fan-triangulated faces (in `desal_io::read_mesh`'s order), the `vt` index of each
+/// corner.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObjUvs {
+    pub uvs: Vec<[f32; 2]>,
+    pub triangles: Vec<[u32; 3]>,
+    /// The vertex index of each corner (to check against the mesh's own faces).
+    pub vertex_triangles: Vec<[u32; 3]>,
+}
+
+/// Reads the `vt` lines and the `v/vt` corners of the `f` lines of an OBJ file.
+pub fn parse_obj_uvs(text: &str, path: &Path) -> Result<ObjUvs, SampleError> {
+    let bad = |line: usize, reason: &str| SampleError::Json {
+        path: path.to_owned(),
+        reason: format!("line {line}: {reason}"),
+    };
+    let mut out = ObjUvs { uvs: Vec::new(), triangles: Vec::new(), vertex_triangles: Vec::new() };
+    for (i, raw) in text.lines().enumerate() {
+        let mut fields = raw.split_whitespace();
+        match fields.next() {
+            Some("vt") => {
+                let mut uv = [0.0f32; 2];
+                for slot in &mut uv {
+                    *slot = fields
+                        .next()
+                        .and_then(|f| f.parse().ok())
+                        .ok_or_else(|| bad(i + 1, "a texture coordinate needs two numbers"))?;
+                }
+                // OBJ's v runs up from the bottom of the image, glTF's down from the top.
+                out.uvs.push([uv[0], 1.0 - uv[1]]);
+            }
+            Some("f") => {
+                let mut corners: Vec<(u32, u32)> = Vec::new();
+                for field in fields {
+                    let mut parts = field.split('/');
+                    let index = |p: Option<&str>| -> Option<u32> { p?.parse::<u32>().ok()?.checked_sub(1) };
+                    let v = index(parts.next());
+                    let t = index(parts.next());
+                    match (v, t) {
+                        (Some(v), Some(t)) => corners.push((v, t)),
+                        _ => return Err(bad(i + 1, "every face corner needs positive v/vt indices")),
+                    }
+                }
+                for k in 1..corners.len().saturating_sub(1) {
+                    let tri = [corners[0], corners[k], corners[k + 1]];
+                    out.vertex_triangles.push(tri.map(|c| c.0));
+                    out.triangles.push(tri.map(|c| c.1));
+                }
+            }
+            _ => {}
+        }
+    }
+    if let Some(t) = out.triangles.iter().flatten().find(|&&t| t as usize >= out.uvs.len()) {
+        return Err(bad(0, &format!("texture coordinate {} is not defined", t + 1)));
+    }
+    Ok(out)
 }

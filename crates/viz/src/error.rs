@@ -15,7 +15,7 @@ pub enum VizError {
 
     /// The configured up and front directions are the same axis.
     #[error("the up direction {up:?} and the front direction {front:?} must be different axes")]
-    ParallelAxes { up: crate::render::Direction, front: crate::render::Direction },
+    ParallelAxes { up: crate::direction::Direction, front: crate::direction::Direction },
 
     /// A view size is zero or too large to allocate sensibly.
     #[error("view size {width} x {height} pixels is out of range (1..=8192 each)")]

@@ -14,6 +14,7 @@
 //! output is a pure function of the mesh, the scalar and the config.
 
 pub mod colormap;
+pub mod direction;
 pub mod error;
 pub mod font;
 pub mod image;

@@ -20,6 +20,7 @@ use desal_mesh::math::{Real, Vec3, bounding_box};
 use glam::Vec3 as ScreenPoint;
 
 use crate::colormap::colormap;
+pub use crate::direction::Direction;
 use crate::error::VizError;
 use crate::font::{GLYPH_HEIGHT, draw_text, format_tick, text_width};
 use crate::image::RgbaImage;
@@ -33,69 +34,6 @@ const VIEW_MARGIN: Real = 0.05;
 /// Text is drawn with each font pixel a 2 × 2 block.
 const TEXT_SCALE: i64 = 2;
 const TEXT_COLOUR: [u8; 4] = [20, 20, 20, 255];
-
-/// A coordinate axis with a sign, for up and front directions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Direction {
-    PosX,
-    NegX,
-    PosY,
-    NegY,
-    PosZ,
-    NegZ,
-}
-
-impl Direction {
-    /// The unit vector.
-    pub fn vector(self) -> Vec3 {
-        match self {
-            Direction::PosX => Vec3::x(),
-            Direction::NegX => -Vec3::x(),
-            Direction::PosY => Vec3::y(),
-            Direction::NegY => -Vec3::y(),
-            Direction::PosZ => Vec3::z(),
-            Direction::NegZ => -Vec3::z(),
-        }
-    }
-
-    /// The axis index: 0 for x, 1 for y, 2 for z.
-    pub fn axis(self) -> usize {
-        match self {
-            Direction::PosX | Direction::NegX => 0,
-            Direction::PosY | Direction::NegY => 1,
-            Direction::PosZ | Direction::NegZ => 2,
-        }
-    }
-
-    /// The positive direction along axis `axis` (0, 1, 2).
-    pub fn positive(axis: usize) -> Self {
-        [Direction::PosX, Direction::PosY, Direction::PosZ][axis]
-    }
-
-    /// The opposite direction.
-    pub fn opposite(self) -> Self {
-        match self {
-            Direction::PosX => Direction::NegX,
-            Direction::NegX => Direction::PosX,
-            Direction::PosY => Direction::NegY,
-            Direction::NegY => Direction::PosY,
-            Direction::PosZ => Direction::NegZ,
-            Direction::NegZ => Direction::PosZ,
-        }
-    }
-
-    /// A caption such as `+Z`.
-    pub fn label(self) -> &'static str {
-        match self {
-            Direction::PosX => "+X",
-            Direction::NegX => "-X",
-            Direction::PosY => "+Y",
-            Direction::NegY => "-Y",
-            Direction::PosZ => "+Z",
-            Direction::NegZ => "-Z",
-        }
-    }
-}
 
 /// A scalar field on the mesh, mapped to colour.
 #[derive(Debug, Clone, Copy)]

@@ -30,10 +30,8 @@ pub use types::*;
 use crate::codec;
 use crate::error::IoError;
 
-/// First eight bytes of every artifact.
-pub const MAGIC: [u8; 8] = *b"DESALART";
-/// Size of the fixed header before the payload.
-pub const HEADER_LEN: usize = 56;
+pub mod layout;
+pub use layout::{HEADER_LEN, MAGIC};
 
 /// What an artifact holds. Codes are frozen: never reuse or renumber one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
