@@ -403,14 +403,13 @@ impl Cache {
     /// a cache's, before anything is run or deleted.
     pub fn check_is_cache(&self) -> Result<()> {
         let root = &self.root;
-        let meta = match fs::symlink_metadata(root) {
+        // The root itself is the user's path: a symlink to a folder is followed.
+        match fs::metadata(root) {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-            other => other.with_context(|| format!("cannot read {}", root.display()))?,
-        };
-        if !fs::metadata(root).with_context(|| format!("cannot read {}", root.display()))?.is_dir() {
-            bail!("{} is not a folder, so not a desal cache", root.display());
+            Err(e) => return Err(e).with_context(|| format!("cannot read {}", root.display())),
+            Ok(meta) if !meta.is_dir() => bail!("{} is not a folder, so not a desal cache", root.display()),
+            Ok(_) => {}
         }
-        let _ = meta;
         let marker = root.join(MARKER);
         if fs::symlink_metadata(&marker).is_ok_and(|m| m.is_file()) {
             // Other tools (cargo, borg, …) write the same standard tag: only desal's counts.
@@ -452,7 +451,7 @@ impl Cache {
                 if entry.file_name().to_string_lossy().starts_with('.') {
                     continue;
                 }
-                if !is_entry(&name, &entry) {
+                if entry_key(&name, &entry).is_none() {
                     return Err(not_ours(&entry.path(), "is not a cache entry"));
                 }
                 entries += 1;
@@ -494,10 +493,11 @@ impl Cache {
             {
                 let entry = entry.with_context(|| format!("cannot read {}", stage_dir.display()))?;
                 let name = entry.file_name().to_string_lossy().into_owned();
-                if name.starts_with('.') || !is_entry(&stage_name, &entry) {
+                if name.starts_with('.') {
                     continue;
                 }
-                if keep.contains(&name) || uses_only(&entry.path(), derived_stage, inputs) {
+                let Some(key) = entry_key(&stage_name, &entry) else { continue };
+                if keep.contains(&name) || uses_only(&key, derived_stage, inputs) {
                     kept += 1;
                     continue;
                 }
@@ -525,42 +525,31 @@ impl Cache {
 /// The files a cache entry holds ([`Cache::store`]).
 const ENTRY_FILES: [&str; 3] = ["artifact.dsa", "summary.json", "key.json"];
 
-/// Whether `entry`, in the stage folder `stage`, is a desal cache entry: a folder (not a
-/// symlink) holding only regular files that [`Cache::store`] writes, whose `key.json` is a
-/// key of that stage that hashes to the entry's name.
-fn is_entry(stage: &str, entry: &fs::DirEntry) -> bool {
+/// The key of `entry`, in the stage folder `stage`, if it is a desal cache entry: a folder
+/// (not a symlink) holding only regular files that [`Cache::store`] writes, whose
+/// `key.json` is a key of that stage that hashes to the entry's name.
+fn entry_key(stage: &str, entry: &fs::DirEntry) -> Option<StageKey> {
     if !entry.file_type().is_ok_and(|t| t.is_dir()) {
-        return false;
+        return None;
     }
     let dir = entry.path();
-    let Ok(files) = fs::read_dir(&dir) else { return false };
+    // `DirEntry::file_type` does not follow symlinks: a link among the files is not ours.
     let ours = |f: &fs::DirEntry| {
         f.file_type().is_ok_and(|t| t.is_file()) && ENTRY_FILES.iter().any(|name| f.file_name() == *name)
     };
-    if !files.flatten().all(|f| ours(&f)) {
-        return false;
+    if !fs::read_dir(&dir).ok()?.flatten().all(|f| ours(&f)) {
+        return None;
     }
-    let key_file = dir.join("key.json");
-    if !fs::symlink_metadata(&key_file).is_ok_and(|m| m.is_file()) {
-        return false;
-    }
-    match desal_io::atomic::read_json::<StageKey>(&key_file) {
-        Ok(key) => key.stage == stage && key.hash().to_hex() == entry.file_name().to_string_lossy(),
-        Err(_) => false,
-    }
+    let key = desal_io::atomic::read_json::<StageKey>(&dir.join("key.json")).ok()?;
+    (key.stage == stage && key.hash().to_hex() == entry.file_name().to_string_lossy()).then_some(key)
 }
 
-/// Whether the entry at `dir` is one of `derived_stage` whose recorded inputs are all in
+/// Whether the entry of `key` is one of `derived_stage` whose recorded inputs are all in
 /// `inputs`. A stage's own entries are kept by key only.
-fn uses_only(dir: &Path, derived_stage: &str, inputs: &std::collections::BTreeSet<ContentHash>) -> bool {
-    match desal_io::atomic::read_json::<StageKey>(&dir.join("key.json")) {
-        Ok(key) => {
-            key.stage == derived_stage
-                && !key.inputs.is_empty()
-                && key.inputs.iter().all(|(_, hash)| inputs.contains(hash))
-        }
-        Err(_) => false,
-    }
+fn uses_only(key: &StageKey, derived_stage: &str, inputs: &std::collections::BTreeSet<ContentHash>) -> bool {
+    key.stage == derived_stage
+        && !key.inputs.is_empty()
+        && key.inputs.iter().all(|(_, hash)| inputs.contains(hash))
 }
 
 /// Test hook: with `DESAL_FAULT_ABORT_IN_STORE=<stage>`, the process aborts halfway

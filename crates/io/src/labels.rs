@@ -181,29 +181,10 @@ fn escape_name(name: &str) -> String {
     out
 }
 
-/// The inverse of [`escape_name`], lenient: a `%` that does not start a valid escape, or
-/// escapes that do not make UTF-8, are kept as written.
+/// The inverse of [`escape_name`], lenient: a name whose `%`s are not all valid escapes
+/// of UTF-8 (a hand-written `100%`) is kept as written.
 fn unescape_name(text: &str) -> String {
-    if !text.contains('%') {
-        return text.to_owned();
-    }
-    let bytes = text.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut i = 0;
-    while i < bytes.len() {
-        let hex = bytes.get(i + 1..i + 3).and_then(|h| std::str::from_utf8(h).ok());
-        match hex.filter(|_| bytes[i] == b'%').and_then(|h| u8::from_str_radix(h, 16).ok()) {
-            Some(b) => {
-                out.push(b);
-                i += 3;
-            }
-            None => {
-                out.push(bytes[i]);
-                i += 1;
-            }
-        }
-    }
-    String::from_utf8(out).unwrap_or_else(|_| text.to_owned())
+    crate::confine::percent_decode(text).unwrap_or_else(|| text.to_owned())
 }
 
 /// Writes labels as text: a comment naming the parts, then one id per line.
