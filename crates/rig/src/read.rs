@@ -428,7 +428,7 @@ impl Reader<'_> {
         let total: u64 = self
             .document
             .animations()
-            .flat_map(|a| a.channels().collect::<Vec<_>>())
+            .flat_map(|a| a.channels())
             .map(|c| values(c.sampler().input()).saturating_add(values(c.sampler().output())))
             .fold(0u64, u64::saturating_add);
         if total > MAX_KEYFRAME_VALUES {
