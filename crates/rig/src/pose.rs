@@ -211,9 +211,10 @@ pub enum PoseSource {
 pub const MAX_FRAMES: usize = 1 << 16;
 
 /// Most vertex positions a posed rig may hold: poses (the bind pose included) × welded
-/// vertices, refused by [`crate::pose_rig`] before anything is allocated. Ingest peaks at
-/// about 47 bytes a position (measured: the rig sample at 2000 frames, 1.28 GB), so 2^25
-/// positions stay near 1.6 GB (the rig sample at up to 2311 frames; SCAPE is 0.9 M).
+/// vertices, refused by [`crate::pose_rig`] before anything is allocated. A whole `desal
+/// run` peaks near 69 bytes a position (the rig sample at `frames = 2000`, 2001 × 13 380
+/// positions: 1.84 GB maximum resident, `/usr/bin/time -v`), so 2^25 positions stay near
+/// 2.3 GB (the rig sample at up to 2507 frames; SCAPE is 0.9 M).
 pub const MAX_POSE_VERTICES: usize = 1 << 25;
 
 /// Most node local poses the sampled frames may hold: frames × nodes, refused by
