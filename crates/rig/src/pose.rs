@@ -214,7 +214,7 @@ pub const MAX_FRAMES: usize = 1 << 16;
 /// vertices, refused by [`crate::pose_rig`] before anything is allocated. A whole `desal
 /// run` peaks near 69 bytes a position (the rig sample at `frames = 2000`, 2001 × 13 380
 /// positions: 1.84 GB maximum resident, `/usr/bin/time -v`), so 2^25 positions stay near
-/// 2.3 GB (the rig sample at up to 2507 frames; SCAPE is 0.9 M).
+/// 2.3 GB (the rig sample at up to 2506 frames; SCAPE is 0.9 M).
 pub const MAX_POSE_VERTICES: usize = 1 << 25;
 
 /// Most node local poses the sampled frames may hold: frames × nodes, refused by
