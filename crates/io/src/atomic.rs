@@ -71,11 +71,17 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, IoErr
     serde_json::from_slice(&bytes).map_err(|e| IoError::Json { path: path.to_owned(), reason: e.to_string() })
 }
 
+/// A number unique to this call in this process: with the process id, what makes every
+/// temporary name desal builds (files here, folders in `dir.rs`) its own.
+pub(crate) fn next_temp_number() -> u64 {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    COUNTER.fetch_add(1, Ordering::Relaxed)
+}
+
 /// A temp name beside `path`, unique per process and call, starting with '.' so that
 /// globs over a folder do not pick it up. Left-overs of a killed run end in `.tmp`.
 fn temp_path(path: &Path) -> PathBuf {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let n = next_temp_number();
     let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("out");
     path.with_file_name(format!(".{name}.{}.{n}.tmp", std::process::id()))
 }

@@ -17,7 +17,6 @@
 use std::fs;
 use std::io;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::error::IoError;
 
@@ -33,9 +32,7 @@ pub fn replace_dir<E: From<IoError>>(
     let (parent, name) = split(target)?;
     fs::create_dir_all(&parent).map_err(|e| IoError::io(&parent, e))?;
     remove_leftovers(&parent);
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let tmp = parent.join(format!(".{name}.tmp-{}-{n}", std::process::id()));
+    let (tmp, n) = temp_dir_beside(&parent, &name);
     let _ = fs::remove_dir_all(&tmp);
     fs::create_dir(&tmp).map_err(|e| IoError::io(&tmp, e))?;
     let filled = fill(&tmp).and_then(|()| {
@@ -56,6 +53,13 @@ pub fn replace_dir<E: From<IoError>>(
     Ok(())
 }
 
+/// A temporary folder's name in `parent` for the folder `name`, unique per process and
+/// call (with its number): hidden, and ending the way `remove_leftovers` knows.
+fn temp_dir_beside(parent: &Path, name: &str) -> (PathBuf, u64) {
+    let n = crate::atomic::next_temp_number();
+    (parent.join(format!(".{name}.tmp-{}-{n}", std::process::id())), n)
+}
+
 /// Creates the folder `target` with what `fill` writes, unless it exists: the first
 /// complete writer wins (a cache entry stored by two shards at once). The folder is
 /// built beside `target` and renamed into place, so `target` never exists half-written.
@@ -70,9 +74,7 @@ pub fn create_dir_once<E: From<IoError>>(
         return Ok(false);
     }
     remove_leftovers(&parent);
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let tmp = parent.join(format!(".{name}.tmp-{}-{n}", std::process::id()));
+    let (tmp, _) = temp_dir_beside(&parent, &name);
     let _ = fs::remove_dir_all(&tmp);
     fs::create_dir(&tmp).map_err(|e| IoError::io(&tmp, e))?;
     if let Err(e) = fill(&tmp) {

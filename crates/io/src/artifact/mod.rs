@@ -277,15 +277,7 @@ pub fn decode_artifact<T: ArtifactBody>(
     path: &Path,
     bytes: &[u8],
 ) -> Result<(Producer, T, ContentHash), IoError> {
-    let header = check_envelope(path, bytes)?;
-    if header.kind != T::KIND {
-        return Err(IoError::WrongKind {
-            path: path.to_owned(),
-            expected: T::KIND.name(),
-            found: header.kind.name().into(),
-        });
-    }
-    check_version(path, &header)?;
+    let header = check_artifact::<T>(path, bytes)?;
     let (producer, body): (Producer, T) = codec::decode(&bytes[HEADER_LEN..])
         .map_err(|reason| IoError::Decode { path: path.to_owned(), reason })?;
     body.validate().map_err(|reason| IoError::InvalidArtifact {
