@@ -1,102 +1,71 @@
-//! Progress bars for the binaries: an `indicatif` implementation of the libraries'
-//! `Progress` trait, or plain log lines when stderr is not a terminal (CI logs, pipes).
+//! The `desal` binary's progress: bars on a terminal (indicatif), the driver's plain log
+//! lines otherwise (CI logs, pipes), nothing with `--quiet`.
 
 use std::io::IsTerminal;
-use std::sync::Mutex;
-use std::time::Instant;
+use std::sync::{Arc, Mutex};
 
+use desal_driver::progress::{Console, Lines};
 use desal_mesh::Progress;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-/// How progress is shown.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ProgressMode {
-    /// Bars on a terminal, log lines otherwise.
-    Auto,
-    /// Nothing.
-    Quiet,
-}
-
-/// Shared by all datasets of a run: one bar per running step.
-#[derive(Debug, Clone)]
-pub struct Bars {
-    multi: Option<MultiProgress>,
-    plain: bool,
-}
-
-impl Bars {
-    pub fn new(mode: ProgressMode) -> Self {
-        match mode {
-            ProgressMode::Quiet => Bars { multi: None, plain: false },
-            ProgressMode::Auto if std::io::stderr().is_terminal() => Bars {
-                multi: Some(MultiProgress::with_draw_target(ProgressDrawTarget::stderr())),
-                plain: false,
-            },
-            ProgressMode::Auto => Bars { multi: None, plain: true },
-        }
-    }
-
-    /// A progress sink for one dataset; labels are prefixed with `prefix`.
-    pub fn for_dataset(&self, prefix: &str) -> StepProgress {
-        StepProgress { bars: self.clone(), prefix: prefix.to_owned(), current: Mutex::new(None) }
-    }
-
-    /// Prints a line without tearing the bars.
-    pub fn println(&self, line: &str) {
-        match &self.multi {
-            Some(m) => {
-                let _ = m.println(line);
-            }
-            None => eprintln!("{line}"),
-        }
+/// The console of a command: `quiet` → nothing but messages; a terminal → bars; else
+/// log lines.
+pub fn console(quiet: bool) -> Arc<dyn Console> {
+    if quiet {
+        Arc::new(Lines { quiet: true })
+    } else if std::io::stderr().is_terminal() {
+        Arc::new(Bars { multi: MultiProgress::with_draw_target(ProgressDrawTarget::stderr()) })
+    } else {
+        Arc::new(Lines { quiet: false })
     }
 }
 
-/// `Progress` for one dataset.
+/// Bars on a terminal, one per running step.
 #[derive(Debug)]
-pub struct StepProgress {
-    bars: Bars,
-    prefix: String,
-    current: Mutex<Option<(ProgressBar, String, Instant)>>,
+struct Bars {
+    multi: MultiProgress,
 }
 
-impl Progress for StepProgress {
+impl Console for Bars {
+    fn for_dataset(&self, prefix: &str) -> Box<dyn Progress + Send + '_> {
+        Box::new(StepBar { multi: &self.multi, prefix: prefix.to_owned(), current: Mutex::new(None) })
+    }
+
+    fn println(&self, line: &str) {
+        let _ = self.multi.println(line);
+    }
+}
+
+/// One dataset's bar.
+#[derive(Debug)]
+struct StepBar<'a> {
+    multi: &'a MultiProgress,
+    prefix: String,
+    current: Mutex<Option<ProgressBar>>,
+}
+
+impl Progress for StepBar<'_> {
     fn begin(&self, label: &str, total: u64) {
-        let label = format!("{}: {label}", self.prefix);
-        let bar = match &self.bars.multi {
-            Some(m) => {
-                let bar = m.add(ProgressBar::new(total));
-                bar.set_style(
-                    ProgressStyle::with_template("{prefix:>28} [{bar:30}] {pos}/{len} {elapsed}")
-                        .expect("valid template")
-                        .progress_chars("=> "),
-                );
-                bar.set_prefix(label.clone());
-                bar
-            }
-            None => ProgressBar::hidden(),
-        };
-        if self.bars.plain {
-            eprintln!("{label} ...");
-        }
-        *self.current.lock().expect("progress lock") = Some((bar, label, Instant::now()));
+        let bar = self.multi.add(ProgressBar::new(total));
+        bar.set_style(
+            ProgressStyle::with_template("{prefix:>28} [{bar:30}] {pos}/{len} {elapsed}")
+                .expect("valid template")
+                .progress_chars("=> "),
+        );
+        bar.set_prefix(format!("{}: {label}", self.prefix));
+        *self.current.lock().expect("progress lock") = Some(bar);
     }
 
     fn advance(&self, n: u64) {
-        if let Some((bar, _, _)) = &*self.current.lock().expect("progress lock") {
+        if let Some(bar) = &*self.current.lock().expect("progress lock") {
             bar.inc(n);
         }
     }
 
     fn finish(&self) {
-        if let Some((bar, label, start)) = self.current.lock().expect("progress lock").take() {
+        if let Some(bar) = self.current.lock().expect("progress lock").take() {
             bar.finish_and_clear();
-            if let Some(m) = &self.bars.multi {
-                m.remove(&bar);
-            }
-            if self.bars.plain {
-                eprintln!("{label} done in {:.3} s", start.elapsed().as_secs_f64());
-            }
+            self.multi.remove(&bar);
         }
     }
 }

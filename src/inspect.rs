@@ -68,9 +68,9 @@ pub fn describe(path: &Path) -> Result<String> {
         // `desal eval`'s own entry, not a stage's.
         ArtifactKind::Floor => {
             let (_, body, _) = artifact::read_artifact::<desal_io::artifact::FloorV1>(path)?;
-            crate::evaluate::floor::describe(&body, &mut out)?;
+            desal_experiment::floor::describe(&body, &mut out)?;
         }
-        _ => crate::stages::describe_stage_artifact(path, header.kind, &mut out)?,
+        _ => desal_driver::stages::describe_stage_artifact(path, header.kind, &mut out)?,
     }
     Ok(out)
 }

@@ -6,9 +6,11 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
-use desal::progress::ProgressMode;
-use desal::run::{RunOptions, Shard};
-use desal::stages::runner::Stage;
+use desal_driver::run::{RunOptions, Shard};
+use desal_driver::stages::runner::Stage;
+
+mod bars;
+mod inspect;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -53,21 +55,21 @@ enum Command {
         explain: bool,
     },
     /// Part labels discovered from a pose-set artifact (what `labels = "auto"` runs).
-    Parts(desal::cli::PartsArgs),
+    Parts(desal_driver::commands::PartsArgs),
     /// Stage 1 alone: per-part rigid fit on artifacts.
-    Fit(desal::cli::FitArgs),
+    Fit(desal_driver::commands::FitArgs),
     /// Stage 2 alone: deformation saliency from a fit.
-    Saliency(desal::cli::SaliencyArgs),
+    Saliency(desal_driver::commands::SaliencyArgs),
     /// Stage 3 alone: simplify a mesh file, optionally weighted by saliency.
-    Simplify(desal::cli::SimplifyArgs),
+    Simplify(desal_driver::commands::SimplifyArgs),
     /// Stage 4 alone: map a simplified template (desal's or another tool's) to original
     /// vertices and apply it to every pose.
-    Map(desal::cli::MapArgs),
+    Map(desal_driver::commands::MapArgs),
     /// Coarse levels for mesh networks (D, U, A per level) as `hierarchy.npz`.
-    Hierarchy(desal::cli::HierarchyArgs),
+    Hierarchy(desal_driver::commands::HierarchyArgs),
     /// The paper's experiment: simplify with each method, fit the SCAPE deformation model
     /// on the simplified poses, deform to every pose and measure v2f/v2v (eval.md).
-    Eval(desal::evaluate::EvalArgs),
+    Eval(desal_experiment::EvalArgs),
     /// The cache: `desal cache gc PIPELINE.toml` keeps the entries the pipeline's
     /// datasets use (running it, from the cache, to know their keys) and removes the rest.
     Cache {
@@ -99,7 +101,7 @@ enum CacheAction {
 fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => desal::report_error(&e),
+        Err(e) => desal_driver::report_error(&e),
     }
 }
 
@@ -113,38 +115,41 @@ fn run(cli: Cli) -> Result<()> {
                 from,
                 jobs,
                 shard,
-                progress: if quiet { ProgressMode::Quiet } else { ProgressMode::Auto },
+                console: bars::console(quiet),
                 explain,
             };
-            let pipeline = desal::pipeline::load(&pipeline, out.as_deref())?;
-            let reports = desal::run::run(&pipeline, &options)?;
-            desal::print_out(&desal::run::summary_table(&reports))
+            let pipeline = desal_driver::pipeline::load(&pipeline, out.as_deref())?;
+            let reports = desal_driver::run::run(&pipeline, &options)?;
+            desal_driver::print_out(&desal_driver::run::summary_table(&reports))
         }
-        Command::Parts(args) => desal::cli::parts(&args),
-        Command::Fit(args) => desal::cli::fit(&args),
-        Command::Saliency(args) => desal::cli::saliency(&args),
-        Command::Simplify(args) => desal::cli::simplify(&args),
-        Command::Map(args) => desal::cli::map(&args),
-        Command::Hierarchy(args) => desal::cli::hierarchy(&args),
-        Command::Eval(args) => desal::evaluate::eval(&args),
+        Command::Parts(args) => desal_driver::commands::parts(&args),
+        Command::Fit(args) => desal_driver::commands::fit(&args),
+        Command::Saliency(args) => desal_driver::commands::saliency(&args),
+        Command::Simplify(args) => desal_driver::commands::simplify(&args),
+        Command::Map(args) => desal_driver::commands::map(&args),
+        Command::Hierarchy(args) => desal_driver::commands::hierarchy(&args),
+        Command::Eval(args) => {
+            let console = bars::console(args.quiet);
+            desal_experiment::eval(&args, console)
+        }
         Command::Cache { action: CacheAction::Gc { pipeline, out, cache_dir } } => {
-            let loaded = desal::pipeline::load(&pipeline, out.as_deref())?;
-            let cache = desal::cache::Cache::for_output(cache_dir.as_deref(), &loaded.out_root);
+            let loaded = desal_driver::pipeline::load(&pipeline, out.as_deref())?;
+            let cache = desal_driver::cache::Cache::for_output(cache_dir.as_deref(), &loaded.out_root);
             // Before the run stores anything there: a folder of user files is refused.
             cache.check_is_cache()?;
             let options = RunOptions {
                 out,
                 cache_dir: cache_dir.clone(),
-                progress: ProgressMode::Quiet,
+                console: bars::console(true),
                 ..RunOptions::default()
             };
-            let runs = desal::run::run_with_stages(&loaded, &options)?;
+            let runs = desal_driver::run::run_with_stages(&loaded, &options)?;
             let keep =
                 runs.iter().flat_map(|r| r.report.stages.iter().map(|s| s.cache_key.clone())).collect();
             // `desal eval`'s floors of these pose sets and labels are kept too.
             let inputs = runs.iter().flat_map(|r| [r.stages.poses.hash, r.stages.labels.hash]).collect();
-            let (kept, removed, freed) = cache.gc(&keep, desal::evaluate::floor::STAGE, &inputs)?;
-            desal::print_out(&format!(
+            let (kept, removed, freed) = cache.gc(&keep, desal_experiment::floor::STAGE, &inputs)?;
+            desal_driver::print_out(&format!(
                 "{}: kept {kept} entries, removed {removed} ({:.1} MB)\n",
                 cache.root().display(),
                 freed as f64 / 1e6
@@ -155,10 +160,10 @@ fn run(cli: Cli) -> Result<()> {
             // any failed.
             let mut failed = 0;
             for file in &files {
-                match desal::inspect::describe(file) {
-                    Ok(text) => desal::print_out(&text)?,
+                match inspect::describe(file) {
+                    Ok(text) => desal_driver::print_out(&text)?,
                     Err(e) => {
-                        desal::report_error(&e);
+                        desal_driver::report_error(&e);
                         failed += 1;
                     }
                 }

@@ -14,7 +14,7 @@ its two halves (paper Eq. 6):
     python3 docs/eval/versus.py OUT/scape/eval/eval.json [METHOD]   (default: desal)
 
 Only the standard library. The sign test is the exact two-sided binomial test over the
-poses whose errors differ, as `sign_test` in src/evaluate/report.rs.
+poses whose errors differ, as `sign_test` in crates/experiment/src/report.rs.
 """
 import json
 import math

@@ -1,6 +1,9 @@
 //! `desal-eval`: the paper's experiment and the method comparison (`desal eval`).
 use clap::Parser;
 
+#[path = "../bars.rs"]
+mod bars;
+
 #[derive(Debug, Parser)]
 #[command(
     name = "desal-eval",
@@ -9,12 +12,13 @@ use clap::Parser;
 )]
 struct Cli {
     #[command(flatten)]
-    args: desal::evaluate::EvalArgs,
+    args: desal_experiment::EvalArgs,
 }
 
 fn main() -> std::process::ExitCode {
-    match desal::evaluate::eval(&Cli::parse().args) {
+    let args = Cli::parse().args;
+    match desal_experiment::eval(&args, bars::console(args.quiet)) {
         Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => desal::report_error(&e),
+        Err(e) => desal_driver::report_error(&e),
     }
 }

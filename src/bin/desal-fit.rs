@@ -5,12 +5,12 @@ use clap::Parser;
 #[command(name = "desal-fit", version, about = "Stage 1: per-part rigid fit of the template onto every pose")]
 struct Cli {
     #[command(flatten)]
-    args: desal::cli::FitArgs,
+    args: desal_driver::commands::FitArgs,
 }
 
 fn main() -> std::process::ExitCode {
-    match desal::cli::fit(&Cli::parse().args) {
+    match desal_driver::commands::fit(&Cli::parse().args) {
         Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => desal::report_error(&e),
+        Err(e) => desal_driver::report_error(&e),
     }
 }

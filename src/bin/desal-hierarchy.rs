@@ -10,12 +10,12 @@ use clap::Parser;
 )]
 struct Cli {
     #[command(flatten)]
-    args: desal::cli::HierarchyArgs,
+    args: desal_driver::commands::HierarchyArgs,
 }
 
 fn main() -> std::process::ExitCode {
-    match desal::cli::hierarchy(&Cli::parse().args) {
+    match desal_driver::commands::hierarchy(&Cli::parse().args) {
         Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => desal::report_error(&e),
+        Err(e) => desal_driver::report_error(&e),
     }
 }

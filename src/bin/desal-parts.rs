@@ -10,12 +10,12 @@ use clap::Parser;
 )]
 struct Cli {
     #[command(flatten)]
-    args: desal::cli::PartsArgs,
+    args: desal_driver::commands::PartsArgs,
 }
 
 fn main() -> std::process::ExitCode {
-    match desal::cli::parts(&Cli::parse().args) {
+    match desal_driver::commands::parts(&Cli::parse().args) {
         Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => desal::report_error(&e),
+        Err(e) => desal_driver::report_error(&e),
     }
 }

@@ -6,12 +6,12 @@ use clap::Parser;
 #[command(name = "desal-saliency", version, about = "Stage 2: per-vertex deformation saliency from the fit")]
 struct Cli {
     #[command(flatten)]
-    args: desal::cli::SaliencyArgs,
+    args: desal_driver::commands::SaliencyArgs,
 }
 
 fn main() -> std::process::ExitCode {
-    match desal::cli::saliency(&Cli::parse().args) {
+    match desal_driver::commands::saliency(&Cli::parse().args) {
         Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => desal::report_error(&e),
+        Err(e) => desal_driver::report_error(&e),
     }
 }

@@ -11,12 +11,12 @@ use clap::Parser;
 )]
 struct Cli {
     #[command(flatten)]
-    args: desal::cli::SimplifyArgs,
+    args: desal_driver::commands::SimplifyArgs,
 }
 
 fn main() -> std::process::ExitCode {
-    match desal::cli::simplify(&Cli::parse().args) {
+    match desal_driver::commands::simplify(&Cli::parse().args) {
         Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => desal::report_error(&e),
+        Err(e) => desal_driver::report_error(&e),
     }
 }

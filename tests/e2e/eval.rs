@@ -443,7 +443,7 @@ fn desal_refit_moves_vertices_to_where_desal_deforms_worse_than_the_full_mesh() 
     );
 
     // The library's (and Python's) `desal-refit` on the same arrays is this mesh exactly:
-    // `desal::memory::simplify_pose_set` with `[simplify] method = "desal-refit"`.
+    // `desal_driver::memory::simplify_pose_set` with `[simplify] method = "desal-refit"`.
     let mut files: Vec<PathBuf> = std::fs::read_dir(data_samples().join("poses"))
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -457,25 +457,26 @@ fn desal_refit_moves_vertices_to_where_desal_deforms_worse_than_the_full_mesh() 
         .map(|m| m.positions.iter().map(|x| [x.x as f32, x.y as f32, x.z as f32]).collect())
         .collect();
     let template = names.iter().position(|n| n == "00_rest").unwrap();
-    let set = desal::memory::pose_set(Some(names), positions, meshes[template].faces.clone(), template)
-        .unwrap()
-        .set;
+    let set =
+        desal_driver::memory::pose_set(Some(names), positions, meshes[template].faces.clone(), template)
+            .unwrap()
+            .set;
     let labels = desal_io::labels::read_labels(&data_samples().join("labels.json")).unwrap();
     let library = |target: usize| {
-        let mut params = desal::memory::StageParams::default();
+        let mut params = desal_driver::memory::StageParams::default();
         params.simplify.target_vertices = Some(target);
-        params.simplify.method = Some(desal::stages::simplify::Method::DesalRefit);
-        desal::memory::simplify_pose_set(
+        params.simplify.method = Some(desal_driver::stages::simplify::Method::DesalRefit);
+        desal_driver::memory::simplify_pose_set(
             &params,
             &set,
             &labels,
-            desal::memory::Stage3::Template,
+            desal_driver::memory::Stage3::Template,
             &desal_mesh::NoProgress,
         )
         .unwrap()
     };
     let ours = library(SAMPLE_TARGET);
-    let (posed, _) = desal::memory::apply_map(&ours.map.body, &set, &labels).unwrap();
+    let (posed, _) = desal_driver::memory::apply_map(&ours.map.body, &set, &labels).unwrap();
     let saved = simplified("desal-refit");
     let p = set.names.iter().position(|n| n == pose).unwrap();
     let ours_f32: Vec<[f32; 3]> =

@@ -6,9 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use desal::progress::ProgressMode;
-use desal::run::RunOptions;
-use desal::stages::ingest;
+use desal_driver::progress::Lines;
+use desal_driver::run::RunOptions;
+use desal_driver::stages::ingest;
 use desal_io::artifact::{self, PoseSetV1, Producer};
 use desal_mesh::NoProgress;
 
@@ -53,17 +53,17 @@ fn bench_fit_and_saliency(c: &mut Criterion) {
     let (set, _) = ingest::ingest_poses(&files, 0, false, &NoProgress).unwrap();
     let labels_path = files[0].with_file_name("vertex_part_labels_16.txt");
     let labels = ingest::ingest_labels(&labels_path, &set).unwrap();
-    let fit_params = desal::stages::fit::FitParams::default();
-    let saliency_params = desal::stages::saliency::SaliencyParams::default();
+    let fit_params = desal_driver::stages::fit::FitParams::default();
+    let saliency_params = desal_driver::stages::saliency::SaliencyParams::default();
     let diagonal = set.template_mesh().diagonal();
     let mut group = c.benchmark_group("scape-71");
     group.sample_size(20);
     group.bench_function("fit (stage 1)", |b| {
-        b.iter(|| desal::stages::fit::compute(&fit_params, &set, &labels, &NoProgress).unwrap());
+        b.iter(|| desal_driver::stages::fit::compute(&fit_params, &set, &labels, &NoProgress).unwrap());
     });
-    let fit = desal::stages::fit::compute(&fit_params, &set, &labels, &NoProgress).unwrap().body;
+    let fit = desal_driver::stages::fit::compute(&fit_params, &set, &labels, &NoProgress).unwrap().body;
     group.bench_function("saliency (stage 2)", |b| {
-        b.iter(|| desal::stages::saliency::compute(&saliency_params, &fit, diagonal).unwrap());
+        b.iter(|| desal_driver::stages::saliency::compute(&saliency_params, &fit, diagonal).unwrap());
     });
     group.finish();
 }
@@ -76,19 +76,19 @@ fn bench_full_pipeline(c: &mut Criterion) {
     }
     let pipeline_file = Path::new(env!("CARGO_MANIFEST_DIR")).join("pipelines/scape.toml");
     let dir = tempfile::tempdir().unwrap();
-    let pipeline = desal::pipeline::load(&pipeline_file, Some(dir.path())).unwrap();
-    let quiet = RunOptions { progress: ProgressMode::Quiet, ..RunOptions::default() };
+    let pipeline = desal_driver::pipeline::load(&pipeline_file, Some(dir.path())).unwrap();
+    let quiet = RunOptions { console: std::sync::Arc::new(Lines { quiet: true }), ..RunOptions::default() };
     let mut group = c.benchmark_group("scape-pipeline");
     group.sample_size(10);
     group.bench_function("cold (empty cache)", |b| {
         b.iter(|| {
             let _ = std::fs::remove_dir_all(dir.path());
-            desal::run::run(&pipeline, &quiet).unwrap()
+            desal_driver::run::run(&pipeline, &quiet).unwrap()
         });
     });
-    desal::run::run(&pipeline, &quiet).unwrap();
+    desal_driver::run::run(&pipeline, &quiet).unwrap();
     group.bench_function("warm (all hits)", |b| {
-        b.iter(|| desal::run::run(&pipeline, &quiet).unwrap());
+        b.iter(|| desal_driver::run::run(&pipeline, &quiet).unwrap());
     });
     group.finish();
 }

@@ -32,9 +32,9 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, ensure};
 use clap::Parser;
-use desal::pipeline;
-use desal::progress::ProgressMode;
-use desal::run::{RunOptions, run};
+use desal_driver::pipeline;
+use desal_driver::progress::Lines;
+use desal_driver::run::{RunOptions, run};
 use desal_eval::{SurfaceIndex, VertexIndex, v2f};
 use desal_io::artifact::{LabelsV1, PoseSetV1, SaliencyV1, SimplifiedV1, read_artifact};
 use desal_mesh::{EdgeTopology, TriMesh, Vec3};
@@ -172,7 +172,7 @@ fn main() -> ExitCode {
     }
     match measure_knobs(&args) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(error) => desal::report_error(&error),
+        Err(error) => desal_driver::report_error(&error),
     }
 }
 
@@ -247,7 +247,7 @@ fn measure_knobs(args: &Args) -> Result<()> {
 /// `work`, and reads back its artifacts; step 2 on the template.
 fn load_dataset(pipeline_file: &Path, work: &Path, rings: usize) -> Result<Dataset> {
     let pipeline = pipeline::load(pipeline_file, Some(work))?;
-    let options = RunOptions { progress: ProgressMode::Quiet, ..RunOptions::default() };
+    let options = RunOptions { console: std::sync::Arc::new(Lines { quiet: true }), ..RunOptions::default() };
     let reports = run(&pipeline, &options)?;
     let dir = reports.first().context("the pipeline ran no dataset")?.out_dir.clone();
     let (_, poses, _) = read_artifact::<PoseSetV1>(&dir.join("poses.dsa"))?;

@@ -16,142 +16,160 @@ use crate::stages::ingest::clean_faces_with_warnings;
 use crate::stages::saliency::SaliencyParams;
 
 /// `desal fit`: stage 1 on an ingested pose set and labels.
-#[derive(Debug, clap::Args)]
+#[derive(Debug)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct FitArgs {
     /// Pose-set artifact (`poses.dsa` from `desal run`).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub poses: PathBuf,
     /// Labels artifact (`labels.dsa`).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub labels: PathBuf,
     /// Where to write the fit artifact.
-    #[arg(long, short)]
+    #[cfg_attr(feature = "cli", arg(long, short))]
     pub output: PathBuf,
     /// `rigid` (Kabsch) or `affine` (the paper's literal fit, for the ablation).
-    #[arg(long, default_value_t = FitParams::default().method)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = FitParams::default().method))]
     pub method: desal_fit::FitModel,
 }
 
 /// `desal saliency`: stage 2 on a fit.
-#[derive(Debug, clap::Args)]
+#[derive(Debug)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct SaliencyArgs {
     /// Pose-set artifact the fit was made from.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub poses: PathBuf,
     /// Fit artifact (`fit.dsa`).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub fit: PathBuf,
     /// Where to write the saliency artifact.
-    #[arg(long, short)]
+    #[cfg_attr(feature = "cli", arg(long, short))]
     pub output: PathBuf,
     /// Sum squared residual distances.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub squared: bool,
     /// Normalise by this percentile of the per-vertex sums, in (0, 100] (100 = the maximum).
-    #[arg(long, default_value_t = SaliencyParams::default().percentile)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = SaliencyParams::default().percentile))]
     pub percentile: f64,
     /// Leave this pose out of the sum (repeatable).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub exclude: Vec<String>,
     /// Weight floor for stage 3.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub floor: Option<f64>,
     /// Also write the heat map PNG here.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub png: Option<PathBuf>,
     /// Also write the template with colours and a `saliency` property here.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub ply: Option<PathBuf>,
     /// Up axis for the picture (x, y, z, optionally signed); detected when absent.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub up_axis: Option<String>,
 }
 
 /// `desal map`: stage 4 on a simplified template — desal's own artifact, or a PLY/OBJ/OFF
 /// made by another tool (MeshLab, CGAL, meshoptimizer), mapped by the same greedy rule.
-#[derive(Debug, clap::Args)]
+#[derive(Debug)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct MapArgs {
     /// Pose-set artifact (`poses.dsa`).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub poses: PathBuf,
     /// Labels artifact (`labels.dsa`).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub labels: PathBuf,
     /// The simplified template: `simplified.dsa`, or a mesh file (.ply, .obj, .off: CGAL writes OFF).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub simplified: PathBuf,
     /// Where to write the map artifact.
-    #[arg(long, short)]
+    #[cfg_attr(feature = "cli", arg(long, short))]
     pub output: PathBuf,
     /// Also write the simplified pose set here (`<pose>.ply` per pose, `parts.txt`,
     /// `vertex_map.txt`).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub out_dir: Option<PathBuf>,
     /// Also write the simplified rig here (`.glb`), for a pose set that `desal run`
     /// ingested from a skinned glTF rig: its skeleton, inverse bind matrices and
     /// animations with the simplified mesh, as `simplified.glb` (exact weights for
     /// desal's subset placement, weights refitted over the poses otherwise). Needs `--rig`.
-    #[arg(long, requires = "rig")]
+    #[cfg_attr(feature = "cli", arg(long, requires = "rig"))]
     pub glb: Option<PathBuf>,
     /// The `.glb`/`.gltf` rig the pose set was ingested from; its bytes must be those the
     /// pose set records, and its `[dataset.rig]` settings are read from the pose set.
-    #[arg(long, requires = "glb")]
+    #[cfg_attr(feature = "cli", arg(long, requires = "glb"))]
     pub rig: Option<PathBuf>,
 }
 
 /// `desal simplify`: stage 3 on a plain mesh, optionally weighted by saliency.
-#[derive(Debug, clap::Args)]
-#[command(group(clap::ArgGroup::new("target").required(true).args(["target_faces", "target_vertices", "ratio"])))]
+#[derive(Debug)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
+#[cfg_attr(feature = "cli", command(group(clap::ArgGroup::new("target").required(true).args(["target_faces", "target_vertices", "ratio"]))))]
 pub struct SimplifyArgs {
     /// Input mesh (PLY, OBJ or OFF).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub input: PathBuf,
     /// Output mesh (PLY), written atomically.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub output: PathBuf,
     /// Stop at this many faces.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub target_faces: Option<usize>,
     /// Stop at this many vertices.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub target_vertices: Option<usize>,
     /// Keep this fraction of the faces, in (0, 1].
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub ratio: Option<f64>,
     /// Per-vertex saliency: a `saliency.dsa` artifact (its floored weights are used), a
     /// PLY with a float vertex property `saliency`, or a text file with one number in
     /// [0, 1] per line (`#` comments allowed). Enables the saliency factor of the cost.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub saliency: Option<PathBuf>,
     /// Weight floor applied to saliency read from PLY or text (`w = floor + (1 - floor) s`),
     /// or replacing an artifact's floor. Default: the artifact's, else 0.05.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub floor: Option<f64>,
     /// Where a collapsed edge's vertex goes: `optimal` (the paper) or `subset` (keep
     /// original vertices).
-    #[arg(long, default_value_t = SimplifyConfig::default().placement)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = SimplifyConfig::default().placement))]
     pub placement: Placement,
     /// Multiply the cost by the edge length (the paper's "balancing" term; with
     /// `--saliency` this is the paper's method). Off by default, as in pipeline files.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub balance: bool,
     /// The error the collapses minimise: `quadric` (Garland–Heckbert, the paper's Q) or
     /// `lindstrom-turk` (memoryless volume and boundary preservation, CGAL's default;
     /// lower surface error on a single mesh, see BENCHMARKS.md).
-    #[arg(long, default_value_t = SimplifyConfig::default().metric)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = SimplifyConfig::default().metric))]
     pub metric: Metric,
     /// Weight of the boundary constraint quadrics (see `boundary_weight` in
     /// pipelines/README.md).
-    #[arg(long, default_value_t = SimplifyConfig::default().boundary_weight)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = SimplifyConfig::default().boundary_weight))]
     pub boundary_weight: f64,
     /// Refuse collapses that leave a face more than this many degrees from the input
     /// normals of its corners' vertices (the fold guard; 180 switches it off).
-    #[arg(long, default_value_t = SimplifyConfig::default().max_corner_normal_deg)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = SimplifyConfig::default().max_corner_normal_deg))]
     pub max_corner_normal_deg: f64,
+    /// Rank collapses by the quadric error per unit area (meshoptimizer's error;
+    /// `normalized_error` in pipeline files).
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub normalized_error: bool,
+    /// `desal`: desal's own method, which sets the placement, cost and metric itself
+    /// (`method` in pipeline files). `desal-refit` needs the poses: use `desal run`.
+    #[cfg_attr(feature = "cli", arg(long, value_parser = parse_method))]
+    pub method: Option<stages::simplify::Method>,
     /// Run the simplification this many times and print SIMPLIFY_SECONDS=<best>
     /// (simplification alone, no I/O), for the peers' benchmark harness.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub repeat: Option<usize>,
+}
+
+/// `--method`: a stage-3 method by its name in pipeline files.
+#[cfg(feature = "cli")]
+fn parse_method(name: &str) -> Result<stages::simplify::Method, String> {
+    name.parse()
 }
 
 fn read<T: ArtifactBody>(path: &Path) -> Result<(T, desal_io::ContentHash)> {
@@ -292,30 +310,40 @@ pub fn map(args: &MapArgs) -> Result<()> {
 }
 
 pub fn simplify(args: &SimplifyArgs) -> Result<()> {
-    use desal_simplify::{SimplifyInput, Target};
+    use desal_simplify::SimplifyInput;
     let mut mesh = desal_io::read_mesh(&args.input)?;
     mesh.faces = clean_faces_with_warnings(&args.input, &mesh.faces).0;
     let weights = match &args.saliency {
         Some(path) => Some(read_weights(path, args.floor, mesh.vertex_count())?),
         None => None,
     };
-    let target = match (args.target_faces, args.target_vertices, args.ratio) {
-        (Some(n), _, _) => Target::Faces(n),
-        (_, Some(n), _) => Target::Vertices(n),
-        (_, _, Some(r)) => Target::Ratio(r),
-        _ => anyhow::bail!("give one of --target-faces, --target-vertices, --ratio"),
-    };
-    let config = SimplifyConfig {
-        target,
+    if [args.target_faces.is_some(), args.target_vertices.is_some(), args.ratio.is_some()] == [false; 3] {
+        anyhow::bail!("give one of --target-faces, --target-vertices, --ratio");
+    }
+    if args.method == Some(stages::simplify::Method::DesalRefit) {
+        anyhow::bail!(
+            "--method desal-refit refits the pose model over the poses: use `desal run` with a pipeline file"
+        );
+    }
+    // The flags are `[simplify]`'s keys: the same parameters resolve them (a plain mesh
+    // has no part labels, so part borders are not kept).
+    let params = stages::simplify::SimplifyParams {
+        target_vertices: args.target_vertices,
+        target_faces: args.target_faces,
+        ratio: args.ratio,
         placement: args.placement,
         saliency: weights.is_some(),
         balance: args.balance,
+        keep_part_borders: false,
         metric: args.metric,
-        boundary_weight: args.boundary_weight,
-        max_corner_normal_deg: args.max_corner_normal_deg,
-        ..SimplifyConfig::default()
+        boundary_weight: Some(args.boundary_weight),
+        normalized_error: args.normalized_error,
+        max_corner_normal_deg: Some(args.max_corner_normal_deg),
+        seams: None,
+        method: args.method,
+        given: Vec::new(),
     };
-    config.validate()?;
+    let config = params.config()?;
     let mut input = SimplifyInput::new(&mesh);
     if let Some(w) = &weights {
         input = input.with_weights(w);
@@ -343,38 +371,39 @@ pub fn simplify(args: &SimplifyArgs) -> Result<()> {
 /// `desal hierarchy`: the coarse levels of a pose set (`[dataset.hierarchy]`) as one
 /// stage on artifacts, with the pipeline's default stage-1–3 settings (plus
 /// `--balance`); writes the same `hierarchy.npz` bytes as `desal run`.
-#[derive(Debug, clap::Args)]
+#[derive(Debug)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct HierarchyArgs {
     /// Pose-set artifact (`poses.dsa`).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub poses: PathBuf,
     /// Labels artifact (`labels.dsa`).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub labels: PathBuf,
     /// Coarse vertex counts, strictly decreasing, e.g. `2500,625`.
-    #[arg(long, value_delimiter = ',', required = true)]
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', required = true))]
     pub levels: Vec<usize>,
     /// `fitted` (pose-aware, default) or `barycentric` (COMA's).
-    #[arg(long, value_enum, default_value_t = stages::hierarchy::UpsamplerName::default())]
+    #[cfg_attr(feature = "cli", arg(long, value_enum, default_value_t = stages::hierarchy::UpsamplerName::default()))]
     pub upsampler: stages::hierarchy::UpsamplerName,
     /// Fitted only: candidate coarse vertices per fine vertex.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub neighbours: Option<usize>,
     /// Fitted only: relative ridge toward the barycentric row.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub ridge: Option<f64>,
     /// Multiply each level's simplification cost by the edge length (the paper's balance
     /// term; off by default, as in pipeline files).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub balance: bool,
     /// Also measure the held-out upsampling error by v2f (slow on large meshes).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub heldout_v2f: bool,
     /// Where to write `hierarchy.npz`.
-    #[arg(long, short)]
+    #[cfg_attr(feature = "cli", arg(long, short))]
     pub output: PathBuf,
     /// Also write the levels' figures (`hierarchy.json`) here.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub json: Option<PathBuf>,
 }
 
@@ -483,25 +512,26 @@ fn read_saliency_values(path: &Path) -> Result<Vec<f64>> {
 
 /// `desal parts`: near-rigid parts discovered from an ingested pose set, written as the
 /// labels artifact `labels = "auto"` gives (byte for byte).
-#[derive(Debug, clap::Args)]
+#[derive(Debug)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct PartsArgs {
     /// Pose-set artifact (`poses.dsa` from `desal run`).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub poses: PathBuf,
     /// The number of parts; absent: chosen at the knee of the residual curve.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub parts: Option<usize>,
     /// Where to write the labels artifact.
-    #[arg(long, short)]
+    #[cfg_attr(feature = "cli", arg(long, short))]
     pub output: PathBuf,
     /// Also write the labels as text here (one id per vertex, `# parts:` header).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub txt: Option<PathBuf>,
     /// Also draw the parts on the template here (PNG).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub png: Option<PathBuf>,
     /// Up axis for the picture (x, y, z, optionally signed); detected when absent.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub up_axis: Option<String>,
 }
 
@@ -540,19 +570,19 @@ mod tests {
 
     #[derive(Debug, Parser)]
     struct Simplify {
-        #[command(flatten)]
+        #[cfg_attr(feature = "cli", command(flatten))]
         args: SimplifyArgs,
     }
 
     #[derive(Debug, Parser)]
     struct Fit {
-        #[command(flatten)]
+        #[cfg_attr(feature = "cli", command(flatten))]
         args: FitArgs,
     }
 
     #[derive(Debug, Parser)]
     struct Saliency {
-        #[command(flatten)]
+        #[cfg_attr(feature = "cli", command(flatten))]
         args: SaliencyArgs,
     }
 

@@ -1,14 +1,19 @@
-//! The desal driver library: pipeline files, ingest, stage adapters, the artifact cache,
-//! batch runs and `inspect`. The binaries in `src/main.rs` and `src/bin/` are thin
-//! wrappers over it.
+//! desal's driver: pipeline files, the stage adapters and their chain, the
+//! content-addressed artifact cache, batch runs, the output folder, and the in-memory
+//! runs the Python package makes. The `desal` binary (the root package) is a thin front
+//! end over it; `desal eval` (desal-experiment) builds on it.
 //!
-//! **Invariant:** this package is the only place that knows paths, the cache, the CLI and
-//! progress bars; the stage crates see data and config structs only.
+//! **Invariant:** this crate is the only place that knows paths, the cache and pipeline
+//! files; the algorithm crates see data and config structs only. It links no terminal
+//! UI and no C/C++: progress goes through [`progress::Console`], and the argument types
+//! of the single-stage commands derive clap's traits only with the `cli` feature.
+//!
+//! Dependency order: `cache` ← `stages` ← `outputs` ← `pipeline` ← `run`, with
+//! `memory` (no cache) beside `run` and `commands` (one stage at a time) on top; no
+//! module imports a later one.
 
 pub mod cache;
-pub mod cli;
-pub mod evaluate;
-pub mod inspect;
+pub mod commands;
 pub mod memory;
 pub mod outputs;
 pub mod pictures;

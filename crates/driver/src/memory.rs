@@ -172,7 +172,7 @@ fn simplify_with_seams(
             let config = desal_simplify::SimplifyConfig { saliency: false, ..config };
             simplify::compute_multipose(&config, set, &saliency.body.weights, labels)?
         }
-        Stage3::Template => crate::stages::stage3::simplify_template(
+        Stage3::Template => simplify::run(
             &params.simplify,
             &params.saliency,
             set,

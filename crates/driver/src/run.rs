@@ -2,6 +2,7 @@
 //! simplify → map, with the cache, progress, a summary table and `report.json`.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -11,7 +12,7 @@ use serde::Serialize;
 use crate::cache::Cache;
 use crate::outputs::{check_output_folder, dataset_outputs, outputs_in_place, outputs_key, write_outputs};
 use crate::pipeline::{Dataset, Pipeline};
-use crate::progress::{Bars, ProgressMode, StepProgress};
+use crate::progress::{Console, Lines};
 use crate::stages::runner::{RunnerOptions, Stage, StageRecord, StageRunner};
 use crate::stages::{Counts, DatasetStages};
 
@@ -30,7 +31,8 @@ pub struct RunOptions {
     pub jobs: usize,
     /// Run only datasets `k` with `k % count == index` (0-based, file order).
     pub shard: Option<Shard>,
-    pub progress: ProgressMode,
+    /// Where progress and messages go.
+    pub console: Arc<dyn Console>,
     /// Print why each stage missed the cache.
     pub explain: bool,
 }
@@ -44,7 +46,7 @@ impl Default for RunOptions {
             from: None,
             jobs: 1,
             shard: None,
-            progress: ProgressMode::Auto,
+            console: Arc::new(Lines::default()),
             explain: false,
         }
     }
@@ -116,21 +118,17 @@ pub fn run_with_stages(pipeline: &Pipeline, options: &RunOptions) -> Result<Vec<
         Some(shard) => shard.select(pipeline.datasets.len()),
         None => (0..pipeline.datasets.len()).collect(),
     };
-    let bars = Bars::new(options.progress);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.jobs.max(1))
         .build()
         .context("cannot start the worker pool")?;
     let results: Vec<Result<DatasetRun>> = if options.jobs <= 1 {
-        selected
-            .iter()
-            .map(|&k| run_dataset(pipeline, &pipeline.datasets[k], &cache, options, &bars))
-            .collect()
+        selected.iter().map(|&k| run_dataset(pipeline, &pipeline.datasets[k], &cache, options)).collect()
     } else {
         pool.install(|| {
             selected
                 .par_iter()
-                .map(|&k| run_dataset(pipeline, &pipeline.datasets[k], &cache, options, &bars))
+                .map(|&k| run_dataset(pipeline, &pipeline.datasets[k], &cache, options))
                 .collect()
         })
     };
@@ -156,7 +154,6 @@ fn run_dataset(
     dataset: &Dataset,
     cache: &Cache,
     options: &RunOptions,
-    bars: &Bars,
 ) -> Result<DatasetRun> {
     let start = Instant::now();
     // What an interrupted run left beside or in the output folder goes first (a live
@@ -166,16 +163,16 @@ fn run_dataset(
     }
     desal_io::dir::remove_leftovers(&dataset.out_dir);
     check_output_folder(&dataset.out_dir)?;
-    let progress: StepProgress = bars.for_dataset(&dataset.spec.name);
+    let progress = options.console.for_dataset(&dataset.spec.name);
     let runner_options = RunnerOptions { force: options.force, from: options.from, explain: options.explain };
     let mut runner = StageRunner {
         cache,
         dataset: &dataset.spec.name,
         options: runner_options,
-        bars,
+        console: &*options.console,
         records: Vec::new(),
     };
-    let stages = crate::stages::run_stages(&dataset.inputs(), &mut runner, &progress)?;
+    let stages = crate::stages::run_stages(&dataset.inputs(), &mut runner, &*progress)?;
     let out_dir = dataset.out_dir.clone();
     let (input, output) = stages.counts();
     let up_axis = dataset.spec.up_axis.as_deref();

@@ -1,4 +1,5 @@
-//! The deformation model that stage 3's `desal-refit` and `desal eval` share: stage 1's
+//! The deformation models by name, and the deformation of a whole pose set, that
+//! `desal-refit` (stage 3) and `desal eval` share: stage 1's
 //! rigid motion of every part drives a pose model (SCAPE part-anchored by default,
 //! SCAPE placed at the ground truth's centroid as in the paper, or LBS), fitted on all
 //! poses (in-sample) and once per fold without the fold's poses (held-out; the template
@@ -6,10 +7,41 @@
 
 use std::time::Instant;
 
-use anyhow::{Context, Result};
-use desal_eval::{FittedModel, ModelConfig, ModelReport, PartTransform, PoseModel};
 use desal_mesh::{PartLabels, PoseSet, Vec3};
 use serde::Serialize;
+use thiserror::Error;
+
+use crate::error::EvalError;
+use crate::floor::synthesise_fitted;
+use crate::model::{ModelConfig, ModelReport};
+use crate::pose_model::{FittedModel, PoseModel};
+use crate::transform::PartTransform;
+
+/// What can go wrong deforming a pose set by a named model.
+#[derive(Debug, Error)]
+pub enum DeformError {
+    #[error("unknown deformation model '{0}': use {models}", models = MODELS.join(", "))]
+    UnknownModel(String),
+    /// Stage 1 (the rigid fit that drives every model) failed on the set.
+    #[error("stage 1 on the simplified pose set")]
+    PartMotions(#[source] desal_fit::FitError),
+    /// Fitting the model named `what` (the in-sample model, or a fold's).
+    #[error("fitting the {what}")]
+    Fit {
+        what: String,
+        #[source]
+        source: EvalError,
+    },
+    /// Synthesising the poses with the model named `what`.
+    #[error("synthesising with the {what}")]
+    Synthesis {
+        what: String,
+        #[source]
+        source: EvalError,
+    },
+}
+
+type Result<T> = std::result::Result<T, DeformError>;
 
 /// One fitted model and what it was used for.
 #[derive(Debug, Clone, Serialize)]
@@ -63,15 +95,15 @@ pub fn pose_model(name: &str) -> Result<PoseModel> {
     Ok(match name {
         "scape" => PoseModel::Scape(ModelConfig::default()),
         "scape-cv" => PoseModel::Scape(ModelConfig {
-            regression: desal_eval::Regression::CrossValidated,
+            regression: crate::Regression::CrossValidated,
             ..ModelConfig::default()
         }),
         "scape-centroid" => PoseModel::Scape(ModelConfig {
-            anchoring: desal_eval::Anchoring::Centroid,
+            anchoring: crate::model::Anchoring::Centroid,
             ..ModelConfig::default()
         }),
-        "lbs" => PoseModel::Lbs(desal_eval::LbsConfig::default()),
-        other => anyhow::bail!("unknown deformation model '{other}': use {}", MODELS.join(", ")),
+        "lbs" => PoseModel::Lbs(crate::lbs::LbsConfig::default()),
+        other => return Err(DeformError::UnknownModel(other.to_owned())),
     })
 }
 
@@ -85,10 +117,9 @@ pub fn deform(
     model: &PoseModel,
 ) -> Result<Deformed> {
     let started = Instant::now();
-    let transforms = part_motions(set, labels).context("stage 1 on the simplified pose set")?;
+    let transforms = part_motions(set, labels)?;
     let rotation_seconds = started.elapsed().as_secs_f64();
-    let centroids: Vec<Vec3> = set.poses.iter().map(|p| centroid(p)).collect();
-    let inputs = ModelInputs { set, labels, transforms: &transforms, centroids: &centroids, model };
+    let inputs = ModelInputs { set, labels, transforms: &transforms, model };
 
     let all_poses: Vec<usize> = (0..set.pose_count()).collect();
     let (in_sample_run, in_sample) = inputs.fit_and_synthesise(None, &all_poses)?;
@@ -110,8 +141,8 @@ pub fn deform(
 /// Stage 1's rigid motion of every part in every pose of `set` (`[pose][part]`), what
 /// every deformation model is driven by.
 pub fn part_motions(set: &PoseSet, labels: &PartLabels) -> Result<Vec<Vec<PartTransform>>> {
-    let fit =
-        desal_fit::fit_pose_set(set, labels, &desal_fit::FitConfig::default(), &desal_mesh::NoProgress)?;
+    let fit = desal_fit::fit_pose_set(set, labels, &desal_fit::FitConfig::default(), &desal_mesh::NoProgress)
+        .map_err(DeformError::PartMotions)?;
     Ok(fit
         .part_fits
         .iter()
@@ -126,7 +157,6 @@ struct ModelInputs<'a> {
     set: &'a PoseSet,
     labels: &'a PartLabels,
     transforms: &'a [Vec<PartTransform>],
-    centroids: &'a [Vec3],
     model: &'a PoseModel,
 }
 
@@ -137,22 +167,18 @@ impl ModelInputs<'_> {
         let set = self.set;
         let training = match fold {
             None => (0..set.pose_count()).collect(),
-            Some(_) => desal_eval::training_poses(set.pose_count(), test),
+            Some(_) => crate::folds::training_poses(set.pose_count(), test),
         };
         let what = fold.map_or_else(|| "in-sample model".to_owned(), |k| format!("model of fold {k}"));
         let started = Instant::now();
         let model = self
             .model
             .fit(set, self.labels, self.transforms, &training)
-            .with_context(|| format!("fitting the {what}"))?;
+            .map_err(|source| DeformError::Fit { what: what.clone(), source })?;
         let fit_seconds = started.elapsed().as_secs_f64();
         let started = Instant::now();
-        let test_transforms: Vec<Vec<PartTransform>> =
-            test.iter().map(|&p| self.transforms[p].clone()).collect();
-        let test_centroids: Vec<Vec3> = test.iter().map(|&p| self.centroids[p]).collect();
-        let synthesised = model
-            .synthesize_many(&test_transforms, &test_centroids)
-            .with_context(|| format!("synthesising with the {what}"))?;
+        let synthesised = synthesise_fitted(&model, set, self.transforms, test)
+            .map_err(|source| DeformError::Synthesis { what, source })?;
         let synthesis_seconds = started.elapsed().as_secs_f64();
         let (joint_count, mean_q_residual, factor_nonzeros) = match &model {
             FittedModel::Scape(m) => {
@@ -173,8 +199,4 @@ impl ModelInputs<'_> {
         };
         Ok((run, synthesised))
     }
-}
-
-fn centroid(points: &[Vec3]) -> Vec3 {
-    points.iter().sum::<Vec3>() / points.len() as f64
 }

@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use crate::error::EvalError;
 use crate::folds::{folds, training_poses};
 use crate::metrics::{SurfaceIndex, VertexIndex, mean, v2f_halves_same_faces, vertex_faces};
-use crate::pose_model::PoseModel;
+use crate::pose_model::{FittedModel, PoseModel};
 use crate::transform::PartTransform;
 
 /// Mean v2v and v2f over a set of poses, squared mesh units.
@@ -115,6 +115,18 @@ fn synthesise(
     test: &[usize],
 ) -> Result<Vec<Vec<Vec3>>, EvalError> {
     let fitted = model.fit(poses, labels, transforms, training)?;
+    synthesise_fitted(&fitted, poses, transforms, test)
+}
+
+/// Synthesises the poses `test` of `poses` (in that order) with a fitted model, each
+/// from its part motions (`transforms[pose]`) and placed at its centroid where the
+/// model places by centroid: how every fold of the floor and of `crate::deform` does.
+pub(crate) fn synthesise_fitted(
+    fitted: &FittedModel,
+    poses: &PoseSet,
+    transforms: &[Vec<PartTransform>],
+    test: &[usize],
+) -> Result<Vec<Vec<Vec3>>, EvalError> {
     let test_transforms: Vec<Vec<PartTransform>> = test.iter().map(|&p| transforms[p].clone()).collect();
     let centroids: Vec<Vec3> = test.iter().map(|&p| centroid(&poses.poses[p])).collect();
     fitted.synthesize_many(&test_transforms, &centroids)

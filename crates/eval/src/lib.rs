@@ -16,6 +16,9 @@
 //!   motions ([`PartTransform`], stage 1's fit); [`model_floor`] measures either model's
 //!   own error in-sample and held out ([`floor`]).
 //! - [`folds()`]: k-fold splits over poses for held-out evaluation.
+//! - [`deform`]: the models by name (`desal eval --model`, [`deform::MODELS`]) and a
+//!   whole pose set deformed by one, in-sample and per fold, driven by stage 1's fit
+//!   (desal-fit): what `desal-refit` and `desal eval` share.
 //!
 //! **Invariant:** like every stage crate, this one knows no file, path or progress bar:
 //! it takes meshes, labels and rotations, and returns positions and numbers. The method
@@ -23,6 +26,7 @@
 
 mod bvh;
 pub mod closest_point;
+pub mod deform;
 pub mod error;
 pub mod floor;
 pub mod folds;

@@ -2,7 +2,7 @@
 //! on the full-resolution pose set six times (in-sample and per fold) and measures 140
 //! syntheses on SCAPE (6.9 s of a 20 s `desal eval pipelines/scape.toml --methods
 //! qslim-optimal`, its log says), and it depends on nothing a method changes. So it is a cache entry like a stage's (`<cache>/floor/<key>`,
-//! [`crate::cache`]), keyed on:
+//! [`desal_driver::cache`]), keyed on:
 //!
 //! | field | what |
 //! |---|---|
@@ -21,8 +21,8 @@ use anyhow::Result;
 use desal_eval::{MeanErrors, ModelFloor, PoseModel};
 use desal_io::artifact::{ArtifactKind, FloorV1, read_artifact};
 
-use crate::cache::{Cache, StageKey, canonical_json, read_entry_file};
-use crate::stages::DatasetStages;
+use desal_driver::cache::{Cache, StageKey, canonical_json, read_entry_file};
+use desal_driver::stages::DatasetStages;
 
 /// The floor's stage id in the cache.
 pub const STAGE: &str = "floor";

@@ -22,7 +22,7 @@ use anyhow::{Context, Result, bail};
 use desal_mesh::{TriMesh, Vec3};
 use desal_rig::{Influences, ReadOptions, Rig, Weld};
 
-use super::rig::{OwnSkin, RigModel};
+use crate::rig::{OwnSkin, RigModel};
 
 /// Most gltfpack runs of one bisection.
 pub const MAX_RUNS: usize = 12;

@@ -2,6 +2,10 @@
 //! simplification to every pose, fit the SCAPE deformation model on the simplified
 //! set, deform to every pose and measure v2f/v2v against the ground truth.
 //!
+//! The peers are features: `meshopt` (on by default) builds meshoptimizer's C++ for its
+//! methods; MeshLab (`meshlab.rs`, pymeshlab in a Python found at run time) and
+//! gltfpack (`gltfpack.rs`, a program on the PATH) are subprocesses named explicitly.
+//!
 //! The story of [`eval`], per dataset of the pipeline file:
 //! 1. run the pipeline's cached stages (`desal run`), so the inputs are validated
 //!    artifacts, and take the pose set, labels and stage-3 saliency weights from their
@@ -34,6 +38,7 @@ pub mod sweep;
 pub mod upsampling;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -43,11 +48,11 @@ use desal_mesh::{PoseSet, TriMesh, Vec3};
 use desal_simplify::Target;
 use rayon::prelude::*;
 
-use crate::pipeline::{Dataset, Pipeline};
-use crate::progress::ProgressMode;
-use crate::run::{DatasetRun, RunOptions};
-use crate::stages::DatasetStages;
-use crate::stages::simplify::SimplifyParams;
+use desal_driver::pipeline::{Dataset, Pipeline};
+use desal_driver::progress::Console;
+use desal_driver::run::{DatasetRun, RunOptions};
+use desal_driver::stages::DatasetStages;
+use desal_driver::stages::simplify::SimplifyParams;
 use desal_io::confine::file_stem_for;
 use figures::{GridRow, Views};
 use measure::{Deformed, MeanStd, Measured, Run};
@@ -55,7 +60,8 @@ use methods::{BASELINE, Inputs, Method, SimplifiedSet};
 use report::{EvalReport, FoldRecord, MethodReport, MethodTimings, PoseRecord};
 
 /// `desal eval` / `desal-eval` arguments.
-#[derive(Debug, Clone, clap::Args)]
+#[derive(Debug, Clone)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 pub struct EvalArgs {
     /// The pipeline file (TOML; see pipelines/README.md). Every dataset is evaluated.
     pub pipeline: PathBuf,
@@ -66,60 +72,63 @@ pub struct EvalArgs {
     /// $DESAL_GLTFPACK or gltfpack); a bare qslim, saliency or paper means both
     /// placements; external:NAME=PATH is another tool's simplified template; all = every
     /// built-in method but MeshLab's and gltfpack's.
-    #[arg(long, value_delimiter = ',', default_value = "all")]
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_value = "all"))]
     pub methods: Vec<String>,
     /// The deformation model: scape (part-anchored, the default: the lowest held-out
     /// error at full resolution), scape-cv (its ridge and features cross-validated in
     /// each training fold), scape-centroid (the paper's placement), lbs (linear blend
     /// skinning with the parts as bones), rig (a rig dataset's own skinning with each
     /// simplified rig's weights; the default for [dataset.rig] datasets).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub model: Option<String>,
     /// The row every relative change and sign test is taken against (default:
     /// qslim-optimal; gltfpack for a rig dataset that runs it).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub baseline: Option<String>,
     /// Skip the model's own floor (the model fitted and measured at full resolution).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub no_floor: bool,
     /// Number of held-out folds over the non-template poses (at least 2).
-    #[arg(long, default_value_t = 5)]
+    #[cfg_attr(feature = "cli", arg(long, default_value_t = 5))]
     pub folds: usize,
     /// Output root (each dataset writes OUT/<name>/eval); overrides the file's `out`.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub out: Option<PathBuf>,
     /// Cache folder for the pipeline's stages (default: <output root>/.cache).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub cache_dir: Option<PathBuf>,
     /// Target vertex count of every method (default: the pipeline's simplify target).
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub target_vertices: Option<usize>,
     /// Write every deformed mesh (and the simplified ground truth) as PLY under
     /// eval/deformed/<method>/{in-sample,held-out,ground-truth}/<pose>.ply.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub save_deformed: bool,
     /// Also evaluate the --sweep-methods at the --sweep-vertices counts: sweep.json,
     /// sweep.png and eval.md's sweep table.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub sweep: bool,
     /// Methods of the sweep, as in --methods (meshlab-saliency needs $DESAL_PYTHON).
-    #[arg(long, value_delimiter = ',', default_value = sweep::SWEEP_METHODS)]
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_value = sweep::SWEEP_METHODS))]
     pub sweep_methods: Vec<String>,
     /// Vertex counts of the sweep.
-    #[arg(long, value_delimiter = ',', default_value = "1000,2000,3000,4000,5000,6000")]
+    #[cfg_attr(
+        feature = "cli",
+        arg(long, value_delimiter = ',', default_value = "1000,2000,3000,4000,5000,6000")
+    )]
     pub sweep_vertices: Vec<usize>,
     /// Poses drawn in the figures (names, comma-separated; default: four spread over the
     /// set).
-    #[arg(long, value_delimiter = ',')]
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ','))]
     pub figure_poses: Vec<String>,
     /// No progress output.
-    #[arg(long)]
+    #[cfg_attr(feature = "cli", arg(long))]
     pub quiet: bool,
 }
 
 /// Runs `desal eval`: every dataset of the pipeline, every method; prints where each
 /// dataset's results went.
-pub fn eval(args: &EvalArgs) -> Result<()> {
+pub fn eval(args: &EvalArgs, console: Arc<dyn Console>) -> Result<()> {
     let methods = Method::parse_list(&args.methods)?;
     let sweep_methods = if args.sweep {
         let sweep_methods = Method::parse_list(&args.sweep_methods).context("--sweep-methods")?;
@@ -151,19 +160,20 @@ pub fn eval(args: &EvalArgs) -> Result<()> {
             desal_io::read_mesh(path).with_context(|| format!("method '{name}'"))?;
         }
     }
-    let pipeline = crate::pipeline::load(&args.pipeline, args.out.as_deref())?;
+    let pipeline = desal_driver::pipeline::load(&args.pipeline, args.out.as_deref())?;
     let options = RunOptions {
         out: args.out.clone(),
         cache_dir: args.cache_dir.clone(),
-        progress: if args.quiet { ProgressMode::Quiet } else { ProgressMode::Auto },
+        console,
         ..RunOptions::default()
     };
-    let runs = crate::run::run_with_stages(&pipeline, &options).context("running the pipeline's stages")?;
+    let runs =
+        desal_driver::run::run_with_stages(&pipeline, &options).context("running the pipeline's stages")?;
     for DatasetRun { dataset, stages, .. } in &runs {
         let dataset = &pipeline.datasets[*dataset];
         let dir = evaluate_dataset(&pipeline, dataset, stages, &methods, &sweep_methods, args)
             .with_context(|| format!("evaluating dataset '{}'", dataset.spec.name))?;
-        crate::print_out(&format!("{}: {}\n", dataset.spec.name, dir.join("eval.md").display()))?;
+        desal_driver::print_out(&format!("{}: {}\n", dataset.spec.name, dir.join("eval.md").display()))?;
     }
     Ok(())
 }
@@ -212,7 +222,7 @@ fn evaluate_dataset(
 
     // Step 2: simplify, map and deform, one method at a time (each runs in parallel);
     // then the upsampling error of the simplified mesh and of its deformations.
-    let fitted = crate::stages::hierarchy::measured_fitted(dataset.spec.hierarchy.as_ref())?;
+    let fitted = desal_driver::stages::hierarchy::measured_fitted(dataset.spec.hierarchy.as_ref())?;
     // Every full-resolution pose's surface index, built once: the upsampling error of
     // every method, the floor and the measure query the same poses.
     let full_surfaces: Vec<SurfaceIndex> = (0..poses.pose_count())
@@ -251,7 +261,7 @@ fn evaluate_dataset(
     };
     let floor = if let Some(model) = floor {
         // Cached: it depends on the pose set, labels, model and folds only.
-        let cache = crate::cache::Cache::for_output(args.cache_dir.as_deref(), &pipeline.out_root);
+        let cache = desal_driver::cache::Cache::for_output(args.cache_dir.as_deref(), &pipeline.out_root);
         let key = floor::key(&model_name, model, args.folds, stages);
         let measured = floor::cached(&cache, &key, &model_name, || {
             model_floor(&inputs, model, args.folds, &full_surfaces)
@@ -542,7 +552,7 @@ fn write_figures(
     let poses = &inputs.poses;
     let shown = figure_poses(poses, evaluated, &args.figure_poses)?;
     let slot = |pose: usize| evaluated.iter().position(|&p| p == pose).expect("figure poses are evaluated");
-    let up = crate::pictures::parse_up_axis(dataset.spec.up_axis.as_deref())?;
+    let up = desal_driver::pictures::parse_up_axis(dataset.spec.up_axis.as_deref())?;
     let views = Views::of(&poses.template_mesh(), up)?;
     let views = &views;
 

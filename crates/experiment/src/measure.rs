@@ -25,9 +25,7 @@ use desal_mesh::{Face, PoseSet, TriMesh, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-pub use crate::stages::refit::pose_model::{
-    DEFAULT_MODEL, Deformed, MODELS, ModelRun, deform, part_motions, pose_model,
-};
+pub use desal_eval::deform::{DEFAULT_MODEL, Deformed, MODELS, ModelRun, deform, part_motions, pose_model};
 
 /// v2f and v2v of one deformed mesh against one target, in squared input units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

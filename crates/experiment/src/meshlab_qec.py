@@ -7,7 +7,7 @@ per-vertex saliency weights as MeshLab's vertex quality, `qualityweight=True` (M
 scales each vertex quadric by its quality: higher = kept longer). `--plain` ignores the
 weights (plain MeshLab, same settings). The settings are those of
 `../shared/peers/meshlab_weighted.py`: preservetopology, optimalplacement, no planar
-quadric. Embedded in the desal binary (src/evaluate/meshlab.rs) and written to a
+quadric. Embedded in the desal binary (crates/experiment/src/meshlab.rs) and written to a
 temporary folder for each run; prints SIMPLIFY_SECONDS=<seconds>.
 """
 import sys

@@ -91,7 +91,7 @@ pub fn simplify(
 fn subset_body(template: &TriMesh, result: &[u32]) -> SimplifiedV1 {
     let faces: Vec<[u32; 3]> = result.chunks_exact(3).map(|f| [f[0], f[1], f[2]]).collect();
     let (kept, faces) = desal_mesh::used_vertices(template.vertex_count(), &faces);
-    let mut body = crate::stages::simplify::external(&TriMesh {
+    let mut body = desal_driver::stages::simplify::external(&TriMesh {
         positions: kept.iter().map(|&v| template.positions[v as usize]).collect(),
         faces,
     });

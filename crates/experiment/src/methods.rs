@@ -30,9 +30,9 @@ use desal_map::MapOutput;
 use desal_mesh::{NoProgress, PartLabels, PoseSet, TriMesh};
 use desal_simplify::{Placement, SimplifyConfig, StopReason, Target};
 
-use super::rig::{OwnSkin, RigModel};
-pub use crate::stages::simplify::Cost;
-use crate::stages::{map, simplify};
+use crate::rig::{OwnSkin, RigModel};
+pub use desal_driver::stages::simplify::Cost;
+use desal_driver::stages::{map, simplify};
 
 /// One method of the comparison.
 #[derive(Debug, Clone, PartialEq)]
@@ -51,11 +51,11 @@ pub enum Method {
     Multipose { cost: Cost, normalized: bool },
     /// meshoptimizer, in-process.
     #[cfg(feature = "meshopt")]
-    Meshopt(super::meshopt::Variant),
+    Meshopt(crate::meshopt::Variant),
     /// MeshLab through pymeshlab, in a Python subprocess.
-    Meshlab(super::meshlab::Variant),
+    Meshlab(crate::meshlab::Variant),
     /// gltfpack on a rig dataset's file, in a subprocess.
-    Gltfpack(super::gltfpack::Variant),
+    Gltfpack(crate::gltfpack::Variant),
     /// Another tool's simplified template, read from `path`.
     External { name: String, path: PathBuf },
 }
@@ -136,14 +136,14 @@ impl Method {
                 return Ok(Method::Multipose { cost, normalized: false });
             }
         }
-        if let Some(variant) = super::meshlab::Variant::ALL.into_iter().find(|v| v.name() == text) {
+        if let Some(variant) = crate::meshlab::Variant::ALL.into_iter().find(|v| v.name() == text) {
             return Ok(Method::Meshlab(variant));
         }
-        if let Some(variant) = super::gltfpack::Variant::ALL.into_iter().find(|v| v.name() == text) {
+        if let Some(variant) = crate::gltfpack::Variant::ALL.into_iter().find(|v| v.name() == text) {
             return Ok(Method::Gltfpack(variant));
         }
         #[cfg(feature = "meshopt")]
-        if let Some(variant) = super::meshopt::Variant::ALL.into_iter().find(|v| v.name() == text) {
+        if let Some(variant) = crate::meshopt::Variant::ALL.into_iter().find(|v| v.name() == text) {
             return Ok(Method::Meshopt(variant));
         }
         let (cost, placement) = text.split_once('-').with_context(|| unknown(text))?;
@@ -227,7 +227,7 @@ pub struct Inputs {
     /// the rig's own skinning is none).
     pub refit_model: Option<PoseModel>,
     /// `desal-refit`'s measures of the full-resolution model, computed once (`refit.rs`).
-    pub full_model: OnceLock<crate::stages::refit::FullModel>,
+    pub full_model: OnceLock<desal_refit::FullModel>,
 }
 
 /// A method's registered simplified pose set.
@@ -279,15 +279,10 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 );
             };
             let seen = &inputs.simplification_poses;
-            let full = crate::stages::refit::full_model(
-                &inputs.full_model,
-                &inputs.poses,
-                seen,
-                &inputs.labels,
-                model,
-            )
-            .with_context(|| format!("{name}: the full-resolution model"))?;
-            let refit = crate::stages::refit::Refit {
+            let full =
+                desal_refit::full_model(&inputs.full_model, &inputs.poses, seen, &inputs.labels, model)
+                    .with_context(|| format!("{name}: the full-resolution model"))?;
+            let refit = desal_refit::Refit {
                 poses: &inputs.poses,
                 labels: &inputs.labels,
                 seen,
@@ -295,7 +290,8 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
                 model,
                 full,
             };
-            let out = refit.simplify(&desal_config(inputs, target)).with_context(|| name.clone())?;
+            let refitted = refit.simplify(&desal_config(inputs, target)).with_context(|| name.clone())?;
+            let out = simplify::refitted(&refitted);
             (out.body, Some(out.summary.stop), out.note)
         }
         Method::Multipose { cost, normalized } => {
@@ -317,7 +313,7 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
             let Target::Vertices(n) = target else {
                 bail!("{name}: meshoptimizer is compared at a vertex count; give --target-vertices");
             };
-            let (body, runs) = super::meshopt::simplify(&template, &inputs.weights, *variant, n);
+            let (body, runs) = crate::meshopt::simplify(&template, &inputs.weights, *variant, n);
             let note = format!(
                 "meshoptimizer {}: {} vertices, {} faces (target {n}; {runs} runs bisecting its index target)",
                 variant.name(),
@@ -335,18 +331,18 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
             let Target::Vertices(n) = target else {
                 bail!("{name}: MeshLab is compared at a vertex count; give --target-vertices");
             };
-            let (mesh, seconds) = super::meshlab::simplify(&template, &inputs.weights, *variant, n)?;
+            let (mesh, seconds) = crate::meshlab::simplify(&template, &inputs.weights, *variant, n)?;
             let mesh = compact(&mesh);
             let note = format!(
                 "MeshLab quadric edge collapse ({}): {} vertices, {} faces (target {n} vertices = {} faces), {seconds:.3} s in MeshLab",
-                if *variant == super::meshlab::Variant::Saliency {
+                if *variant == crate::meshlab::Variant::Saliency {
                     "saliency as vertex quality"
                 } else {
                     "plain"
                 },
                 mesh.vertex_count(),
                 mesh.face_count(),
-                super::meshlab::face_target(&template, n),
+                crate::meshlab::face_target(&template, n),
             );
             let stop = if mesh.vertex_count() <= n {
                 StopReason::TargetReached
@@ -362,7 +358,7 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
             let Some(rig) = &inputs.rig else {
                 bail!("{name}: gltfpack simplifies a glTF rig, so it runs on [dataset.rig] datasets only");
             };
-            let out = super::gltfpack::simplify(rig, *variant, n).with_context(|| name.clone())?;
+            let out = crate::gltfpack::simplify(rig, *variant, n).with_context(|| name.clone())?;
             let stop = if out.reached { StopReason::TargetReached } else { StopReason::NoValidCollapse };
             skin = Some(out.skin);
             (simplify::external(&out.mesh), Some(stop), out.note)
@@ -389,7 +385,7 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
 /// `desal`'s stage-3 settings (`stages::simplify::desal_settings`, which `desal run`'s
 /// `method = "desal"` and `"desal-refit"` use too) with `target`.
 fn desal_config(inputs: &Inputs, target: Target) -> SimplifyConfig {
-    crate::stages::simplify::desal_settings(SimplifyConfig { target, ..inputs.base_config.clone() })
+    desal_driver::stages::simplify::desal_settings(SimplifyConfig { target, ..inputs.base_config.clone() })
 }
 
 /// Stage 3 on the template with `config`, the dataset's seams kept: the body, its stop

@@ -1,14 +1,14 @@
 //! Which deformation model a dataset is evaluated with (`desal eval --model`), and the
 //! one call that deforms a method's simplified set with it: a fitted pose model
 //! (`measure::deform`: SCAPE or LBS with the parts as bones) or, for a rig dataset, the
-//! rig's own skinning ([`super::rig`]).
+//! rig's own skinning ([`crate::rig`]).
 
 use anyhow::{Context, Result, bail};
 use desal_eval::PoseModel;
 
-use super::measure::{self, Deformed};
-use super::methods::{Inputs, SimplifiedSet};
-use super::rig::SkinnedSet;
+use crate::measure::{self, Deformed};
+use crate::methods::{Inputs, SimplifiedSet};
+use crate::rig::SkinnedSet;
 
 /// The rig's own linear blend skinning (rig datasets only).
 pub const RIG: &str = "rig";
@@ -33,7 +33,7 @@ pub fn names() -> String {
 pub fn check(name: Option<&str>) -> Result<()> {
     match name {
         None | Some(RIG) => Ok(()),
-        Some(other) => measure::pose_model(other).map(|_| ()),
+        Some(other) => Ok(measure::pose_model(other).map(|_| ())?),
     }
 }
 
@@ -58,7 +58,9 @@ impl EvalModel {
     /// Deforms `set` to every pose, in-sample and per fold of `folds`.
     pub fn deform(&self, inputs: &Inputs, set: &SimplifiedSet, folds: &[Vec<usize>]) -> Result<Deformed> {
         match self {
-            EvalModel::Pose(model) => measure::deform(&set.mapped.poses, &set.mapped.labels, folds, model),
+            EvalModel::Pose(model) => {
+                Ok(measure::deform(&set.mapped.poses, &set.mapped.labels, folds, model)?)
+            }
             EvalModel::Rig => {
                 let rig = inputs.rig.as_ref().context("the rig model needs a [dataset.rig] dataset")?;
                 let skinned = SkinnedSet {

@@ -6,9 +6,9 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use super::measure::{Errors, MeanStd, ModelRun, PoseErrors};
-use super::regions::RegionStats;
-use super::upsampling::{PoseUpsamplers, UpsamplingReport};
+use crate::measure::{Errors, MeanStd, ModelRun, PoseErrors};
+use crate::regions::RegionStats;
+use crate::upsampling::{PoseUpsamplers, UpsamplingReport};
 
 /// The paper's Table 1 (SCAPE, 2500 vertices; v2f, v2v in m²).
 pub const PAPER_TABLE: [(&str, f64, f64); 3] =
@@ -63,12 +63,12 @@ pub struct FloorReport {
     pub v2f_ratio: f64,
     /// Wall time of the measurement, or of the cache look-up when `cached`.
     pub seconds: f64,
-    /// Read from the cache (`<cache>/floor`, [`super::floor`]) instead of measured.
+    /// Read from the cache (`<cache>/floor`, [`crate::floor`]) instead of measured.
     pub cached: bool,
 }
 
 impl FloorReport {
-    pub fn new(measured: &super::floor::Floor) -> Self {
+    pub fn new(measured: &crate::floor::Floor) -> Self {
         let floor = &measured.floor;
         Self {
             poses: floor.pose_count,
@@ -623,7 +623,7 @@ fn cost_table(md: &mut String, report: &EvalReport) {
 #[cfg(test)]
 mod tests {
     use super::{PoseRecord, sign_test, versus};
-    use crate::evaluate::measure::{Errors, PoseErrors};
+    use crate::measure::{Errors, PoseErrors};
 
     /// A pose whose every error is `v2v` (v2f = v2v / 2), in every split.
     fn pose(k: usize, v2v: f64) -> PoseRecord {

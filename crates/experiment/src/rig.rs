@@ -26,8 +26,8 @@ use desal_mesh::{PoseSet, Vec3};
 use desal_rig::{Influences, PosedRig, Rig, SimplifiedInput, WeightOptions};
 use rayon::prelude::*;
 
-use super::measure::{Deformed, ModelRun};
-use crate::stages::rig::{RigInput, RigSource};
+use crate::measure::{Deformed, ModelRun};
+use desal_driver::stages::rig::{RigInput, RigSource};
 
 /// A rig dataset's input rig, posed at the pose set's frames.
 #[derive(Debug)]

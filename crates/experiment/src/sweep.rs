@@ -12,11 +12,11 @@ use std::time::Instant;
 use desal_simplify::Target;
 use serde::Serialize;
 
-use super::figures::SweepPanel;
-use super::measure::{Run, measure};
-use super::methods::{Inputs, Method, simplify_and_map};
-use super::model::EvalModel;
-use super::report::{Figures, Summary, Versus, summarise, versus_split};
+use crate::figures::SweepPanel;
+use crate::measure::{Run, measure};
+use crate::methods::{Inputs, Method, simplify_and_map};
+use crate::model::EvalModel;
+use crate::report::{Figures, Summary, Versus, summarise, versus_split};
 
 /// The methods a sweep compares unless `--sweep-methods` names others: issue 17's
 /// list, but for MeshLab's, which needs Python with pymeshlab.

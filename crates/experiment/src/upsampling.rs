@@ -13,7 +13,7 @@
 //! On each of the fold's test poses, `desal_hierarchy::upsampling_errors` measures, against the full-resolution pose, mean
 //! squared vertex distance and v2f (m²):
 //! - `ground_truth`: U · (the pose at `orig`), the upsampling error proper;
-//! - `deformed`: U · (the held-out deformed coarse pose of [`super::measure::deform`]).
+//! - `deformed`: U · (the held-out deformed coarse pose of [`crate::measure::deform`]).
 
 use anyhow::{Context, Result};
 use desal_eval::SurfaceIndex;
@@ -24,8 +24,8 @@ use desal_hierarchy::{
 use desal_mesh::{PoseSet, Vec3};
 use serde::Serialize;
 
-use super::measure::{Deformed, MeanStd};
-use super::methods::SimplifiedSet;
+use crate::measure::{Deformed, MeanStd};
+use crate::methods::SimplifiedSet;
 
 /// One pose's upsampling errors (m²).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]

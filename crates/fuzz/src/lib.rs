@@ -312,7 +312,7 @@ const RIG_FRAMES: desal_rig::FrameConfig =
 /// back (cheap for the generated seeds; the sample rig's 14 517 vertices are not).
 const RIG_WRITE_LIMIT: usize = 2000;
 
-/// Uses a rig the reader accepted as `desal run` does (`src/stages/rig.rs`): frames
+/// Uses a rig the reader accepted as `desal run` does (`crates/driver/src/stages/rig.rs`): frames
 /// sampled, the welded mesh posed, its seams found, its dominant-joint labels, and for a
 /// small rig the simplified rig (here: every welded vertex kept, subset placement)
 /// written as a `.glb` that desal's own reader must accept.

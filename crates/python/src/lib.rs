@@ -1,5 +1,5 @@
 //! `desal._desal`, the native half of the `desal` Python package: every stage and the
-//! pipeline on NumPy arrays. The stages are the root package's own (`desal::memory`, the
+//! pipeline on NumPy arrays. The stages are the root package's own (`desal_driver::memory`, the
 //! same calls `desal run` makes), so the same arrays give the same bytes as the CLI.
 //! The GIL is released while a stage computes.
 //!
@@ -15,13 +15,13 @@ mod convert;
 mod errors;
 mod progress;
 
-use desal::memory::{self, Stage3, StageParams};
-use desal::stages::fit::FitParams;
-use desal::stages::hierarchy::HierarchyParams;
-use desal::stages::parts::PartsParams;
-use desal::stages::rig::RigParams;
-use desal::stages::saliency::SaliencyParams;
-use desal::stages::simplify::{self as simplify_stage, Cost, Method, SimplifyParams};
+use desal_driver::memory::{self, Stage3, StageParams};
+use desal_driver::stages::fit::FitParams;
+use desal_driver::stages::hierarchy::HierarchyParams;
+use desal_driver::stages::parts::PartsParams;
+use desal_driver::stages::rig::RigParams;
+use desal_driver::stages::saliency::SaliencyParams;
+use desal_driver::stages::simplify::{self as simplify_stage, Cost, Method, SimplifyParams};
 use desal_io::artifact::{FitV1, SaliencyV1, SimplifiedV1};
 use desal_mesh::{PartLabels, PoseSet, TriMesh};
 use pyo3::prelude::*;
@@ -486,7 +486,8 @@ fn map<'py>(
                 body.input_vertices = ps.set.vertex_count() as u32;
                 body.input_faces = ps.set.face_count() as u32;
             }
-            let out = desal::stages::map::compute(&body, &ps.set, &ps.labels).map_err(errors::input)?;
+            let out =
+                desal_driver::stages::map::compute(&body, &ps.set, &ps.labels).map_err(errors::input)?;
             let (poses, _) = memory::apply_map(&out.body, &ps.set, &ps.labels).map_err(errors::classify)?;
             Ok((out.body, poses))
         })?;
@@ -516,11 +517,7 @@ fn stage_params(
     let stage3 = if method == "multipose" { Stage3::Multipose } else { Stage3::Template };
     // desal's own methods (docs/eval/desal-method.md), as `[simplify] method` names
     // them: they set the cost's settings themselves.
-    let own = match method {
-        "desal" => Some(Method::Desal),
-        "desal-refit" => Some(Method::DesalRefit),
-        _ => None,
-    };
+    let own = method.parse::<Method>().ok();
     if own.is_some() {
         p.simplify.method = own;
     } else if stage3 == Stage3::Template {
@@ -703,7 +700,6 @@ fn run<'py>(
     explain: bool,
     progress: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    use clap::ValueEnum as _;
     guard("run", || {
         let pipeline = args::path("pipeline", pipeline)?;
         let out = out.map(|o| args::path("out", o)).transpose()?;
@@ -711,7 +707,7 @@ fn run<'py>(
         let jobs = jobs.map(|j| args::index("jobs", j)).transpose()?.unwrap_or(1);
         let from = from_stage
             .map(|s| {
-                desal::stages::runner::Stage::from_str(s, true).map_err(|_| {
+                s.parse::<desal_driver::stages::runner::Stage>().map_err(|_| {
                     bad(
                         "from_stage",
                         format!(
@@ -724,22 +720,18 @@ fn run<'py>(
         let reports = py.detach(|| {
             // The pipeline file is the caller's input: anything wrong with it (a FIFO or
             // a device included, which the driver refuses) is an InputError.
-            let pipeline = desal::pipeline::load(&pipeline, out.as_deref()).map_err(errors::input)?;
-            let options = desal::run::RunOptions {
+            let pipeline = desal_driver::pipeline::load(&pipeline, out.as_deref()).map_err(errors::input)?;
+            let options = desal_driver::run::RunOptions {
                 out,
                 cache_dir,
                 force,
                 from,
                 jobs: jobs.max(1),
-                progress: if progress {
-                    desal::progress::ProgressMode::Auto
-                } else {
-                    desal::progress::ProgressMode::Quiet
-                },
+                console: std::sync::Arc::new(desal_driver::progress::Lines { quiet: !progress }),
                 explain,
                 ..Default::default()
             };
-            desal::run::run(&pipeline, &options).map_err(errors::classify)
+            desal_driver::run::run(&pipeline, &options).map_err(errors::classify)
         })?;
         convert::to_python(py, &reports)
     })

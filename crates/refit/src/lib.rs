@@ -35,21 +35,38 @@
 
 use std::sync::OnceLock;
 
-use anyhow::{Context, Result, bail};
+use desal_eval::deform::{self, DeformError};
 use desal_eval::{PoseModel, SurfaceIndex};
-use desal_io::artifact::SimplifiedV1;
-use desal_map::MapOutput;
+use desal_map::{MapConfig, MapError, MapMode, MapOutput};
 use desal_mesh::{Face, NoProgress, PartLabels, PoseSet, TriMesh, Vec3};
-use desal_simplify::SimplifyConfig;
+use desal_simplify::{PartBorders, Simplified, SimplifyConfig, SimplifyError, SimplifyInput};
 use rayon::prelude::*;
-
-use crate::stages::map;
-use crate::stages::runner::StageOutput;
-use crate::stages::simplify;
-use crate::stages::simplify::SimplifySummary;
+use thiserror::Error;
 
 pub mod flip;
-pub mod pose_model;
+
+/// What can go wrong in `desal-refit`; each says which step failed.
+#[derive(Debug, Error)]
+pub enum RefitError {
+    #[error("desal-refit needs a pose besides the template to measure its residual on")]
+    NoPoseToMeasure,
+    #[error("desal-refit: the full-resolution model")]
+    FullModel(#[source] DeformError),
+    #[error("desal-refit: stage 3, {run} run")]
+    Simplify {
+        run: &'static str,
+        #[source]
+        source: SimplifyError,
+    },
+    #[error("desal-refit: stage 4 of the first run")]
+    Map(#[source] MapError),
+    #[error("desal-refit: the first run's residual")]
+    Residual(#[source] DeformError),
+    #[error("desal-refit: the edge flips need subset placement (every vertex an original one)")]
+    NotSubset,
+}
+
+type Result<T> = std::result::Result<T, RefitError>;
 
 /// The exponent of the excess (`γ`). Without keep penalties (SCAPE, against
 /// `qslim-optimal`, v2f / v2v held out): 0.25 −0.8 % / −2.8 %, 0.35 −2.5 % / −1.1 %,
@@ -86,9 +103,9 @@ impl FullModel {
     pub fn measure(poses: &PoseSet, seen: &[usize], labels: &PartLabels, model: &PoseModel) -> Result<Self> {
         let truth = poses.subset(seen);
         if truth.pose_count() < 2 {
-            bail!("desal-refit needs a pose besides the template to measure its residual on");
+            return Err(RefitError::NoPoseToMeasure);
         }
-        let deformed = pose_model::deform(&truth, labels, &[], model)?.in_sample;
+        let deformed = deform::deform(&truth, labels, &[], model).map_err(RefitError::FullModel)?.in_sample;
         let residual = surface_residual(&truth, &deformed, &truth.faces);
         let measured: Vec<usize> = (0..truth.pose_count()).filter(|&p| p != truth.template).collect();
         let mut position_error = vec![0.0; truth.vertex_count()];
@@ -121,43 +138,55 @@ pub struct Refit<'a> {
     pub full: &'a FullModel,
 }
 
-/// The settings `desal-refit` resolves to beside stage 3's configuration, for the cache
-/// key of a `desal run` stage 3 with `method = "desal-refit"`: a change to any of them
-/// makes another simplification.
-pub fn resolved_json() -> serde_json::Value {
-    serde_json::json!({
-        "version": VERSION,
-        "model": pose_model::DEFAULT_MODEL,
-        "exponent": EXPONENT,
-        "floor": FLOOR,
-        "keep_penalty": KEEP_PENALTY,
-    })
+/// The settings `desal-refit` resolves to beside stage 3's configuration: a `desal run`
+/// stage 3 with `method = "desal-refit"` keys its cache entry by them, so a change to
+/// any of them makes another simplification.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Settings {
+    pub version: u32,
+    pub model: &'static str,
+    pub exponent: f64,
+    pub floor: f64,
+    pub keep_penalty: f64,
 }
+
+/// Today's [`Settings`].
+pub const SETTINGS: Settings = Settings {
+    version: VERSION,
+    model: deform::DEFAULT_MODEL,
+    exponent: EXPONENT,
+    floor: FLOOR,
+    keep_penalty: KEEP_PENALTY,
+};
 
 /// The version of `desal-refit`'s procedure beyond its constants (the weight rule, the
 /// residual, the flips); bumped when one changes, so that cached results are remade.
 pub const VERSION: u32 = 1;
 
-/// `desal run`'s stage 3 with `method = "desal-refit"` (and the library's and Python's,
-/// through `stage3::simplify_template`): the SCAPE pose model ([`pose_model::DEFAULT_MODEL`], as `desal
-/// eval` runs it by default) fitted at full resolution on the poses `seen` (those stage 2
-/// read), then [`Refit::simplify`] with `config`, `desal`'s settings and the target
-/// (`stages::simplify::desal_settings`). `seams`: the template's attribute seams.
-pub fn compute(
+/// `desal-refit`'s result: the weighted run's simplification with its edges flipped,
+/// the configuration that run used, and the number of flips.
+#[derive(Debug)]
+pub struct Refitted {
+    pub simplified: Simplified,
+    /// The weighted run's configuration (`config` with the saliency factor on).
+    pub config: SimplifyConfig,
+    pub flips: usize,
+}
+
+/// `desal-refit` with the SCAPE pose model ([`deform::DEFAULT_MODEL`], as `desal eval`
+/// runs it by default) fitted at full resolution on the poses `seen` (those stage 2
+/// read), then [`Refit::simplify`] with `config` (`desal`'s settings and the target).
+/// `seams`: the template's attribute seams.
+pub fn refit(
     config: &SimplifyConfig,
     poses: &PoseSet,
     labels: &PartLabels,
     seen: &[usize],
     seams: Option<&[[u32; 2]]>,
-) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
-    let started = std::time::Instant::now();
-    let model = pose_model::pose_model(pose_model::DEFAULT_MODEL)?;
-    let full =
-        FullModel::measure(poses, seen, labels, &model).context("desal-refit: the full-resolution model")?;
-    let refit = Refit { poses, labels, seen, seams, model: &model, full: &full };
-    let mut out = refit.simplify(config).context("desal-refit")?;
-    out.summary.seconds = started.elapsed().as_secs_f64();
-    Ok(out)
+) -> Result<Refitted> {
+    let model = deform::pose_model(deform::DEFAULT_MODEL).map_err(RefitError::FullModel)?;
+    let full = FullModel::measure(poses, seen, labels, &model)?;
+    Refit { poses, labels, seen, seams, model: &model, full: &full }.simplify(config)
 }
 
 impl Refit<'_> {
@@ -165,41 +194,38 @@ impl Refit<'_> {
     /// placement, the error per unit area, no saliency, no balance) with the target; the
     /// first run, its residual, the weighted run, both with the keep penalties, then the
     /// flips. The second run's output, with the flipped faces and a note that counts them.
-    pub fn simplify(&self, config: &SimplifyConfig) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
+    pub fn simplify(&self, config: &SimplifyConfig) -> Result<Refitted> {
         let template = self.poses.template_mesh();
         let penalty = self.full.keep_penalty();
-        let run = |config: &SimplifyConfig, weights: &[f64]| {
-            simplify::compute_with_keep_penalty(
-                config,
-                &template,
-                weights,
-                self.labels,
-                self.seams,
-                Some(&penalty),
-                &NoProgress,
-            )
+        let run = |config: &SimplifyConfig, weights: &[f64], run: &'static str| {
+            let mut input = SimplifyInput::new(&template).with_keep_penalty(&penalty);
+            if let Some(seams) = self.seams {
+                input = input.with_seams(seams);
+            }
+            if config.saliency {
+                input = input.with_weights(weights);
+            }
+            if config.part_borders != PartBorders::Ignore {
+                input = input.with_part_labels(&self.labels.labels);
+            }
+            desal_simplify::simplify_with_progress(&input, config, &NoProgress)
+                .map_err(|source| RefitError::Simplify { run, source })
         };
         // The first run reads no weights (`desal` has no saliency factor).
-        let first = run(config, &[]).context("stage 3, first run")?;
-        let mapped = map::map(&first.body, self.poses, self.labels).context("stage 4 of the first run")?;
-        let weights = weights(self.poses, self.seen, self.full, self.model, &mapped)
-            .context("the first run's residual")?;
+        let first = run(config, &[], "first")?;
+        let mapped = map_subset(&first, self.poses, self.labels)?;
+        let weights = weights(self.poses, self.seen, self.full, self.model, &mapped)?;
         let config = SimplifyConfig { saliency: true, ..config.clone() };
-        let mut out = run(&config, &weights).context("stage 3, weighted run")?;
-        let flips = self.flip(&mut out.body).context("the edge flips")?;
-        out.summary.method = "desal-refit".into();
-        out.note = format!(
-            "{} (weighted by the first run's residual; both runs keep the vertices the full model places best), edge flips: {flips}",
-            out.note
-        );
-        Ok(out)
+        let mut simplified = run(&config, &weights, "weighted")?;
+        let flips = self.flip(&mut simplified)?;
+        Ok(Refitted { simplified, config, flips })
     }
 
-    /// The last step (`flip.rs`): `body`'s edges flipped where its faces follow the full
-    /// surface better over the poses stage 2 saw; the number of flips.
-    fn flip(&self, body: &mut SimplifiedV1) -> Result<usize> {
-        let Some(kept) = body.simp_to_orig.iter().copied().collect::<Option<Vec<u32>>>() else {
-            bail!("the edge flips need subset placement (every vertex an original one)");
+    /// The last step (`flip.rs`): `simplified`'s edges flipped where its faces follow
+    /// the full surface better over the poses stage 2 saw; the number of flips.
+    fn flip(&self, simplified: &mut Simplified) -> Result<usize> {
+        let Some(kept) = simplified.simp_to_orig.iter().copied().collect::<Option<Vec<u32>>>() else {
+            return Err(RefitError::NotSubset);
         };
         // Every vertex on a seam is pinned: stage 3 hands a seam on along its collapses,
         // so a simplified seam edge need not be an original one.
@@ -208,8 +234,24 @@ impl Refit<'_> {
             on_seam[v as usize] = true;
         }
         let pinned: Vec<bool> = kept.iter().map(|&o| on_seam[o as usize]).collect();
-        Ok(flip::flip_edges(&mut body.faces, &kept, self.poses, self.seen, &pinned))
+        Ok(flip::flip_edges(&mut simplified.mesh.faces, &kept, self.poses, self.seen, &pinned))
     }
+}
+
+/// Stage 4 of a subset simplification of `poses`' template: every pose of the set at
+/// the kept vertices, the labels carried along.
+fn map_subset(simplified: &Simplified, poses: &PoseSet, labels: &PartLabels) -> Result<MapOutput> {
+    let Some(kept_orig) = simplified.simp_to_orig.iter().copied().collect::<Option<Vec<u32>>>() else {
+        return Err(RefitError::NotSubset);
+    };
+    desal_map::map_pose_set(
+        &MapConfig::default(),
+        MapMode::Subset { kept_orig: &kept_orig },
+        &simplified.mesh,
+        poses,
+        labels,
+    )
+    .map_err(RefitError::Map)
 }
 
 /// The full model's measures, computed on the first call and kept in `cache`.
@@ -239,7 +281,7 @@ pub fn weights(
 ) -> Result<Vec<f64>> {
     let truth = poses.subset(seen);
     let set = coarse.poses.subset(seen);
-    let deformed = pose_model::deform(&set, &coarse.labels, &[], model)?.in_sample;
+    let deformed = deform::deform(&set, &coarse.labels, &[], model).map_err(RefitError::Residual)?.in_sample;
     let r = surface_residual(&truth, &deformed, &set.faces);
     Ok(rule(&r, &full.residual, EXPONENT, FLOOR))
 }

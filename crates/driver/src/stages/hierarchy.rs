@@ -36,7 +36,8 @@ use crate::stages::simplify::SimplifyParams;
 pub const HELDOUT_FOLDS: usize = 2;
 
 /// `upsampler` in `[dataset.hierarchy]`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum UpsamplerName {
     /// Pose-aware least squares over the training poses (the default).
@@ -161,7 +162,7 @@ impl LevelSettings<'_> {
         labels: ContentHash,
         parent: Option<ContentHash>,
     ) -> Result<StageKey> {
-        let simplify = super::stage3::key(&self.simplify_params(step), poses, poses, labels, None)?;
+        let simplify = self.simplify_params(step).key(poses, poses, labels)?;
         let fit = self.fit.key(poses, labels);
         let saliency = self.saliency.key(poses, poses)?;
         let mut inputs = vec![("poses".to_owned(), poses), ("labels".to_owned(), labels)];
@@ -335,16 +336,8 @@ pub fn compute_level(
         Vec::new()
     };
     let params = settings.simplify_params(step);
-    let simplified = super::stage3::simplify_template(
-        &params,
-        settings.saliency,
-        &fine,
-        &fine_labels,
-        &weights,
-        None,
-        progress,
-    )?
-    .body;
+    let simplified =
+        super::simplify::run(&params, settings.saliency, &fine, &fine_labels, &weights, None, progress)?.body;
     let mapped = super::map::map(&simplified, &fine, &fine_labels)?;
     let coarse_to_fine = mapped.map.simp_to_orig;
     let faces = simplified.faces;

@@ -3,21 +3,19 @@
 //! artifact conversion. [`run_stages`] is the pipeline's story in order; the runner
 //! (`runner.rs`) serves each stage from the cache or computes it.
 //!
-//! Dependency order of the root package: `cache` ← `stages` ← `outputs` ← `pipeline` ←
-//! `run` ← {`cli`, `evaluate`}; no module imports a later one.
+//! Dependency order of the driver: `cache` ← `stages` ← `outputs` ← `pipeline` ←
+//! `run` ← `commands`; no module imports a later one.
 
 pub mod fit;
 pub mod hierarchy;
 pub mod ingest;
 pub mod map;
 pub mod parts;
-pub mod refit;
 pub mod rig;
 pub mod runner;
 pub mod saliency;
 pub mod seams;
 pub mod simplify;
-pub mod stage3;
 
 use std::cell::OnceCell;
 use std::path::Path;
@@ -175,15 +173,14 @@ pub fn run_stages(
         }
         _ => None,
     };
-    let key = stage3::key(
-        inputs.simplify,
+    let key = inputs.simplify.key_with_seams(
         poses.hash,
         salient.hash,
         labels.hash,
         seam_edges.as_ref().map(|s| s.hash),
     )?;
     let simplified = runner.stage(Stage::Simplify, key, &[], || {
-        stage3::simplify_template(
+        simplify::run(
             inputs.simplify,
             inputs.saliency,
             set()?,

@@ -13,10 +13,11 @@ use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use crate::cache::{Cache, StageKey};
-use crate::progress::Bars;
+use crate::progress::Console;
 
 /// The stages in run order. `--from` names one of them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, clap::ValueEnum, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Stage {
     Ingest,
@@ -27,6 +28,44 @@ pub enum Stage {
     Simplify,
     Map,
     Hierarchy,
+}
+
+impl Stage {
+    /// Every stage, in run order.
+    pub const ALL: [Stage; 7] = [
+        Stage::Ingest,
+        Stage::Parts,
+        Stage::Fit,
+        Stage::Saliency,
+        Stage::Simplify,
+        Stage::Map,
+        Stage::Hierarchy,
+    ];
+
+    /// The stage's name, as `--from` and the Python package spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Ingest => "ingest",
+            Stage::Parts => "parts",
+            Stage::Fit => "fit",
+            Stage::Saliency => "saliency",
+            Stage::Simplify => "simplify",
+            Stage::Map => "map",
+            Stage::Hierarchy => "hierarchy",
+        }
+    }
+}
+
+impl std::str::FromStr for Stage {
+    type Err = String;
+
+    /// A stage by its name, in any case.
+    fn from_str(name: &str) -> Result<Self, String> {
+        Stage::ALL.into_iter().find(|s| s.name().eq_ignore_ascii_case(name)).ok_or_else(|| {
+            let names: Vec<&str> = Stage::ALL.iter().map(|s| s.name()).collect();
+            format!("unknown stage '{name}': use one of {}", names.join(", "))
+        })
+    }
 }
 
 /// What a stage computes: its artifact body, a typed summary (the JSON sidecar) and a
@@ -115,7 +154,7 @@ pub struct StageRunner<'a> {
     pub cache: &'a Cache,
     pub dataset: &'a str,
     pub options: RunnerOptions,
-    pub bars: &'a Bars,
+    pub console: &'a dyn Console,
     pub records: Vec<StageRecord>,
 }
 
@@ -164,7 +203,7 @@ impl StageRunner<'_> {
             self.cache.explain_miss(self.dataset, &key)
         };
         if self.options.explain {
-            self.bars.println(&format!("{}: {} missed the cache: {reason}", self.dataset, key.stage));
+            self.console.println(&format!("{}: {} missed the cache: {reason}", self.dataset, key.stage));
         }
         let StageOutput { body, summary, note } = compute()?;
         let stored = StoredSummary { summary, note };

@@ -5,6 +5,7 @@
 
 use anyhow::{Result, bail};
 use desal_io::artifact::{ArtifactKind, ContentHash, SimplifiedV1};
+use desal_mesh::Progress;
 use desal_mesh::{PartLabels, PoseSet, TriMesh, Vec3};
 use desal_simplify::{
     Metric, PartBorders, Placement, Simplified, SimplifyConfig, SimplifyInput, SimplifyReport, StopReason,
@@ -15,6 +16,7 @@ use serde_json::json;
 
 use crate::cache::{StageKey, canonical_json};
 use crate::stages::runner::StageOutput;
+use crate::stages::saliency::SaliencyParams;
 
 /// The keys of `[simplify]` that name its target; at most one may be given.
 pub const TARGET_KEYS: [&str; 3] = ["target_vertices", "target_faces", "ratio"];
@@ -53,6 +55,11 @@ pub struct SimplifyParams {
     /// `desal` method). Off (the paper's) when absent.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub normalized_error: bool,
+    /// The fold guard ([`SimplifyConfig::max_corner_normal_deg`]): a collapse may not
+    /// leave a face more than this many degrees from its corners' input normals (180
+    /// switches it off); the library's default when absent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_corner_normal_deg: Option<f64>,
     /// What stage 3 does with a dataset's attribute seams (a rig's UV and normal seams;
     /// pose-file datasets have none): `keep` them as polylines (the default when absent)
     /// or `ignore` them.
@@ -93,6 +100,7 @@ struct SimplifyFile {
     metric: Option<Metric>,
     boundary_weight: Option<f64>,
     normalized_error: Option<bool>,
+    max_corner_normal_deg: Option<f64>,
     seams: Option<Seams>,
     method: Option<Method>,
 }
@@ -126,6 +134,7 @@ impl From<SimplifyFile> for SimplifyParams {
             metric: file.metric.unwrap_or(default.metric),
             boundary_weight: file.boundary_weight,
             normalized_error: file.normalized_error.unwrap_or(default.normalized_error),
+            max_corner_normal_deg: file.max_corner_normal_deg,
             seams: file.seams,
             method: file.method,
             given: given.into_iter().filter(|&(_, g)| g).map(|(key, _)| key).collect(),
@@ -142,11 +151,26 @@ pub enum Method {
 }
 
 impl Method {
+    /// Every method, in the order documentation lists them.
+    pub const ALL: [Method; 2] = [Method::Desal, Method::DesalRefit];
+
+    /// The method's name in pipeline files, on the command line and in Python.
     pub fn name(self) -> &'static str {
         match self {
             Method::Desal => "desal",
             Method::DesalRefit => "desal-refit",
         }
+    }
+}
+
+impl std::str::FromStr for Method {
+    type Err = String;
+
+    fn from_str(name: &str) -> Result<Self, String> {
+        Method::ALL.into_iter().find(|m| m.name() == name).ok_or_else(|| {
+            let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+            format!("unknown method '{name}': use one of {}", names.join(", "))
+        })
     }
 }
 
@@ -176,6 +200,7 @@ impl Default for SimplifyParams {
             metric: library.metric,
             boundary_weight: None,
             normalized_error: library.normalized_error,
+            max_corner_normal_deg: None,
             seams: None,
             method: None,
             given: Vec::new(),
@@ -218,6 +243,7 @@ impl SimplifyParams {
             metric: self.metric,
             boundary_weight: self.boundary_weight.unwrap_or(library.boundary_weight),
             normalized_error: self.normalized_error,
+            max_corner_normal_deg: self.max_corner_normal_deg.unwrap_or(library.max_corner_normal_deg),
             ..library
         };
         if let Some(method) = self.method {
@@ -319,20 +345,27 @@ impl SimplifyParams {
         if self.normalized_error {
             parameters["normalized_error"] = json!(true);
         }
+        if let Some(deg) = self.max_corner_normal_deg {
+            parameters["max_corner_normal_deg"] = json!(deg);
+        }
         if let Some(mode) = self.seams {
             parameters["seams"] = json!(mode);
         }
-        // Only with a method, so that every key made before it still matches. The
-        // method's own constants are added by `stage3::key`.
+        // Only with a method, so that every key made before it still matches.
         if let Some(method) = self.method {
             parameters["method"] = json!(method.name());
+        }
+        let mut resolved = resolved_json(&config);
+        // desal-refit's own constants: a change to any of them makes another result.
+        if refit {
+            resolved["desal_refit"] = serde_json::to_value(desal_refit::SETTINGS)?;
         }
         Ok(StageKey {
             stage: "simplify".into(),
             stage_version: desal_simplify::VERSION,
             format_version: ArtifactKind::Simplified.current_version(),
             parameters: canonical_json(&parameters),
-            resolved: resolved_json(&config),
+            resolved: canonical_json(&resolved),
             inputs,
         })
     }
@@ -362,7 +395,7 @@ pub fn desal_settings(config: SimplifyConfig) -> SimplifyConfig {
 
 /// Every field of the configuration, destructured exhaustively: a field added to
 /// [`SimplifyConfig`] and left out here does not compile, so it cannot miss the key.
-fn resolved_json(config: &SimplifyConfig) -> String {
+fn resolved_json(config: &SimplifyConfig) -> serde_json::Value {
     let SimplifyConfig {
         target,
         placement,
@@ -397,7 +430,7 @@ fn resolved_json(config: &SimplifyConfig) -> String {
     if *normalized_error {
         resolved["normalized_error"] = json!(true);
     }
-    canonical_json(&resolved)
+    resolved
 }
 
 /// Which factors of the paper's cost (Eq. 5) are on: the names of tables and reports.
@@ -556,6 +589,53 @@ pub fn compute_multipose(
         "multipose".to_owned()
     };
     Ok(output(&config, &method, &result))
+}
+
+/// Stage 3 as `desal run`, every hierarchy level and the Python package run it on
+/// `set`'s template, keyed by [`SimplifyParams::key_with_seams`]: `simplify.method`'s
+/// method when one is named (`desal-refit` fits the pose model on the poses `saliency`
+/// reads), else one run with `simplify`'s settings; `weights` are stage 2's, `seams` the
+/// template's attribute seams.
+pub fn run(
+    simplify: &SimplifyParams,
+    saliency: &SaliencyParams,
+    set: &PoseSet,
+    labels: &PartLabels,
+    weights: &[f64],
+    seams: Option<&[[u32; 2]]>,
+    progress: &dyn Progress,
+) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
+    let config = simplify.config()?;
+    match simplify.method {
+        Some(Method::DesalRefit) => {
+            let started = std::time::Instant::now();
+            let result = desal_refit::refit(&config, set, labels, &saliency.seen_poses(set), seams)?;
+            let mut out = refitted(&result);
+            out.summary.seconds = started.elapsed().as_secs_f64();
+            Ok(out)
+        }
+        method => {
+            let mut out =
+                compute_with_seams(&config, &set.template_mesh(), weights, labels, seams, progress)?;
+            if let Some(method) = method {
+                out.summary.method = method.name().into();
+            }
+            Ok(out)
+        }
+    }
+}
+
+/// `desal-refit`'s result as stage 3's output: the weighted run's, named `desal-refit`,
+/// with a note that counts the flips.
+pub fn refitted(refitted: &desal_refit::Refitted) -> StageOutput<SimplifiedV1, SimplifySummary> {
+    let config = &refitted.config;
+    let mut out = output(config, Cost::of(config).name(), &refitted.simplified);
+    out.summary.method = Method::DesalRefit.name().into();
+    out.note = format!(
+        "{} (weighted by the first run's residual; both runs keep the vertices the full model places best), edge flips: {}",
+        out.note, refitted.flips
+    );
+    out
 }
 
 fn output(
@@ -717,7 +797,7 @@ mod tests {
     /// `method` resolves to desal's settings (whatever the defaults say), refuses a
     /// setting it would replace, and enters the key: `desal-refit` with the saliency
     /// artifact (the poses stage 2 saw) and the labels as inputs (its constants:
-    /// `stage3::key`); a key without a method is the key stage 3 always had.
+    /// `desal_refit::SETTINGS`); a key without a method is the key stage 3 always had.
     #[test]
     fn a_method_sets_its_own_settings_and_enters_the_key() {
         let (poses, saliency, labels) =
@@ -802,6 +882,18 @@ mod tests {
             assert_eq!(cost.name().parse::<Cost>(), Ok(cost));
             let (saliency, balance) = cost.switches();
             assert_eq!(Cost::of(&SimplifyConfig { saliency, balance, ..SimplifyConfig::default() }), cost);
+        }
+    }
+    /// `desal-refit`'s constants are in its key's resolved part; no other key holds them.
+    #[test]
+    fn the_key_of_desal_refit_holds_its_constants() {
+        let hash = ContentHash::of(b"poses");
+        let desal = SimplifyParams { method: Some(Method::Desal), ..SimplifyParams::default() };
+        let refit = SimplifyParams { method: Some(Method::DesalRefit), ..SimplifyParams::default() };
+        let with = refit.key(hash, hash, hash).unwrap();
+        assert!(!desal.key(hash, hash, hash).unwrap().resolved.contains("desal_refit"));
+        for constant in ["desal_refit", "exponent", "keep_penalty", "\"model\":\"scape\""] {
+            assert!(with.resolved.contains(constant), "{constant}: {}", with.resolved);
         }
     }
 }
