@@ -52,7 +52,9 @@ fn every_rust_file_opens_with_a_module_doc() {
 fn no_silent_zero_defaults_in_the_driver() {
     let needle = ["unwrap_or", "(0)"].concat();
     let mut files = Vec::new();
-    rust_files(&workspace().join("src"), &mut files);
+    for dir in ["src", "crates/driver/src", "crates/experiment/src"] {
+        rust_files(&workspace().join(dir), &mut files);
+    }
     let offenders: Vec<String> = files
         .into_iter()
         .filter(|f| std::fs::read_to_string(f).unwrap().contains(&needle))

@@ -563,26 +563,26 @@ pub fn parts(args: &PartsArgs) -> Result<()> {
     Ok(())
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "cli"))]
 mod tests {
     use super::*;
     use clap::Parser;
 
     #[derive(Debug, Parser)]
     struct Simplify {
-        #[cfg_attr(feature = "cli", command(flatten))]
+        #[command(flatten)]
         args: SimplifyArgs,
     }
 
     #[derive(Debug, Parser)]
     struct Fit {
-        #[cfg_attr(feature = "cli", command(flatten))]
+        #[command(flatten)]
         args: FitArgs,
     }
 
     #[derive(Debug, Parser)]
     struct Saliency {
-        #[cfg_attr(feature = "cli", command(flatten))]
+        #[command(flatten)]
         args: SaliencyArgs,
     }
 

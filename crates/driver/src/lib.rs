@@ -8,8 +8,8 @@
 //! UI and no C/C++: progress goes through [`progress::Console`], and the argument types
 //! of the single-stage commands derive clap's traits only with the `cli` feature.
 //!
-//! Dependency order: `cache` ← `stages` ← `outputs` ← `pipeline` ← `run`, with
-//! `memory` (no cache) beside `run` and `commands` (one stage at a time) on top; no
+//! Dependency order: `cache` ← `stages` ← {`outputs`, `pipeline`} ← `run`, with
+//! `memory` (no cache) beside `run` and `commands` (one stage at a time) beside them; no
 //! module imports a later one.
 
 pub mod cache;

@@ -22,7 +22,7 @@
 //!
 //! **Invariant:** like every stage crate, this one knows no file, path or progress bar:
 //! it takes meshes, labels and rotations, and returns positions and numbers. The method
-//! comparison, tables and figures live in the driver (`desal eval`).
+//! comparison, tables and figures live in desal-experiment (`desal eval`).
 
 mod bvh;
 pub mod closest_point;

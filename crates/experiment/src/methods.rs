@@ -90,8 +90,8 @@ impl Method {
     pub fn name(&self) -> String {
         match self {
             Method::Quadric { cost, placement } => format!("{}-{}", cost.name(), placement.name()),
-            Method::Desal => "desal".into(),
-            Method::DesalRefit => "desal-refit".into(),
+            Method::Desal => simplify::Method::Desal.name().into(),
+            Method::DesalRefit => simplify::Method::DesalRefit.name().into(),
             Method::Multipose { cost: Cost::Qslim, normalized: false } => "multipose".into(),
             Method::Multipose { normalized: true, .. } => "multipose-normalized".into(),
             Method::Multipose { cost, .. } => format!("multipose-{}", cost.name()),
@@ -118,11 +118,12 @@ impl Method {
             }
             return Ok(Method::External { name: name.into(), path: PathBuf::from(path) });
         }
-        if text == "desal" {
-            return Ok(Method::Desal);
-        }
-        if text == "desal-refit" {
-            return Ok(Method::DesalRefit);
+        // desal's own methods, by the names `[simplify] method` gives them.
+        if let Ok(own) = text.parse::<simplify::Method>() {
+            return Ok(match own {
+                simplify::Method::Desal => Method::Desal,
+                simplify::Method::DesalRefit => Method::DesalRefit,
+            });
         }
         if text == "multipose" {
             return Ok(Method::Multipose { cost: Cost::Qslim, normalized: false });

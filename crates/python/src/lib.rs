@@ -1,5 +1,5 @@
 //! `desal._desal`, the native half of the `desal` Python package: every stage and the
-//! pipeline on NumPy arrays. The stages are the root package's own (`desal_driver::memory`, the
+//! pipeline on NumPy arrays. The stages are desal-driver's own (`desal_driver::memory`, the
 //! same calls `desal run` makes), so the same arrays give the same bytes as the CLI.
 //! The GIL is released while a stage computes.
 //!
@@ -411,6 +411,12 @@ fn simplify<'py>(
         let positions = convert::points_f64("vertices", vertices)?;
         let faces = convert::faces("faces", faces)?;
         let mut params: SimplifyParams = table("simplify", options)?;
+        if params.method == Some(Method::DesalRefit) {
+            return Err(bad(
+                "options",
+                "method = \"desal-refit\" refits the pose model over the poses: use simplify_pose_set(..., method=\"desal-refit\")",
+            ));
+        }
         params.saliency = weights.is_some();
         let weights = weights.map(|w| convert::values_f64("weights", w)).transpose()?.unwrap_or_default();
         let labels = labels.map(|l| convert::ids("labels", l)).transpose()?;

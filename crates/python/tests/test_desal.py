@@ -278,3 +278,4 @@ def test_help_reads_well():
     assert "InputError" in desal.PoseSet.__doc__ and "template" in desal.PoseSet.__doc__
     for f in (desal.fit, desal.saliency, desal.map, desal.simplify_pose_set, desal.hierarchy, desal.run, desal.load):
         assert f.__doc__ and len(f.__doc__) > 80, f.__name__
+

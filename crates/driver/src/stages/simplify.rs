@@ -70,7 +70,7 @@ pub struct SimplifyParams {
     /// run, the error per unit area, subset placement) or `desal-refit` (`desal`, then
     /// again weighted by where its mesh deforms worse than the full one under the SCAPE
     /// pose model, both runs keeping the vertices that model places best, then edge
-    /// flips; `stages/refit.rs`). Absent: one run with the settings above (the paper's
+    /// flips; `crates/refit`). Absent: one run with the settings above (the paper's
     /// stage 3).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub method: Option<Method>,
