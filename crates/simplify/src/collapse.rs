@@ -410,7 +410,8 @@ with_avx2_clone! {
 
 /// Performs a checked collapse: the faces on the edge die, `remove`'s other faces are
 /// re-pointed to `keep`, the quadrics add up and `keep` moves; the slots whose edges or
-/// costs change are stamped for the next listing (`edges.rs`).
+/// costs change are stamped for the next listing (`edges.rs`). Inlined by force into
+/// `try_collapse`'s clones (BENCHMARKS.md "Issue 40").
 #[inline(always)]
 fn collapse_edge(engine: &mut Engine, c: &Candidate) {
     let Engine { surface: s, stamps, origin, tally, .. } = engine;
@@ -518,7 +519,7 @@ fn extract_output(engine: Engine, mesh: &TriMesh, stop: StopReason, started: Ins
 /// output's numbering keeps slot order, so slots ascending, each with its upper
 /// neighbours ascending, are the unique edges in the sorted order that function sums
 /// them in, and the figures are its own, bit for bit, without its sort of every
-/// corner pair (2.5 % of a SCAPE run's instructions).
+/// corner pair (BENCHMARKS.md "Issue 40").
 fn output_edge_length_stats(lists: &FaceLists, simp_of_slot: &[u32], positions: &[Vec3]) -> (f64, f64) {
     let mut upper = Vec::with_capacity(16);
     let mut stats = desal_mesh::LengthStats::default();

@@ -219,19 +219,20 @@ struct Sweep<'a> {
 
 impl Sweep<'_> {
     /// Whether slot `v`'s edges must be listed again.
-    #[inline(always)]
+    #[inline]
     fn touched(&self, v: u32) -> bool {
         !self.have_previous || self.stamps.touched[v as usize] >= self.last
     }
 
     /// Whether neither `a` nor `b` was modified in the last pass.
-    #[inline(always)]
+    #[inline]
     fn unchanged(&self, a: u32, b: u32) -> bool {
         self.stamps.modified[a as usize] < self.last && self.stamps.modified[b as usize] < self.last
     }
 
     /// Lists slot `v` (`i` in the chunk) again: its edges to higher live neighbours, each
     /// with its old cost when it was listed before and is unchanged, else costed.
+    /// Inlined by force into `list_chunk`'s clones (BENCHMARKS.md "Issue 40").
     #[inline(always)]
     fn list_slot(
         &self,
@@ -265,7 +266,7 @@ impl Sweep<'_> {
 
     /// The end of the run of slots from `v` (untouched) that were not touched in the last
     /// pass, within the chunk (`end`).
-    #[inline(always)]
+    #[inline]
     fn untouched_run_end(&self, v: u32, end: u32) -> u32 {
         let after = &self.stamps.touched[v as usize + 1..end as usize];
         v + 1 + after.iter().position(|&t| t >= self.last).unwrap_or(after.len()) as u32
@@ -274,6 +275,7 @@ impl Sweep<'_> {
     /// Costs again the edges of `copied` (the edges of the chunk's slots `local`) whose
     /// `hi` was modified in the last pass (every one without cost reuse); a slot not
     /// touched in the last pass was not modified in it either.
+    /// Inlined by force into `list_chunk`'s clones (BENCHMARKS.md "Issue 40").
     #[inline(always)]
     fn cost_copied_again(
         &self,
@@ -315,7 +317,7 @@ impl Sweep<'_> {
 /// Appends to `out` the old edges and costs of the chunk's slots `local` (untouched in
 /// the last pass), their group starts shifted to `out`'s; returns where the copied edges
 /// are in `out`.
-#[inline(always)]
+#[inline]
 fn copy_runs(old: &ChunkEdges, out: &mut ChunkEdges, local: Range<usize>) -> Range<usize> {
     let (i, j) = (local.start, local.end);
     let from = old.start[i] as usize;
@@ -333,6 +335,7 @@ fn copy_runs(old: &ChunkEdges, out: &mut ChunkEdges, local: Range<usize>) -> Ran
 /// vertex has few neighbours: insertion into a sorted run beats collecting, sorting and
 /// deduplicating, and the run is short enough that a linear scan from its end finds the
 /// place (`Vec::insert` and a binary search cost a `memmove` call and a loop each).
+/// Inlined by force into `list_chunk`'s clones (BENCHMARKS.md "Issue 40").
 #[inline(always)]
 pub(crate) fn upper_neighbours<'a>(lists: &FaceLists, v: u32, upper: &'a mut Vec<u32>) -> &'a [u32] {
     upper.clear();
@@ -379,12 +382,13 @@ impl<'a> CostBatch<'a> {
     }
 
     /// Costs edge `(a, b)` into the last entry of `costs`.
-    #[inline(always)]
+    #[inline]
     fn cost(&mut self, costs: &mut [f64], a: u32, b: u32) {
         self.cost_at(costs, costs.len() - 1, a, b);
     }
 
-    /// Costs edge `(a, b)` into `costs[at]`, now or once four are waiting.
+    /// Costs edge `(a, b)` into `costs[at]`, now or once four are waiting. Inlined by
+    /// force into `list_chunk`'s clones (BENCHMARKS.md "Issue 40").
     #[inline(always)]
     fn cost_at(&mut self, costs: &mut [f64], at: usize, a: u32, b: u32) {
         if !self.four {

@@ -68,7 +68,7 @@ pub(crate) struct Candidate {
 
 /// Placement and cost of collapsing edge `(a, b)`; `None` when the edge may not
 /// collapse at all (a frozen endpoint, both pinned, or a non-finite cost).
-/// Inlined by force (into `try_collapse`; −0.35 M instructions on SCAPE).
+/// Inlined by force into `try_collapse`'s clones (BENCHMARKS.md "Issue 40").
 #[inline(always)]
 pub(crate) fn evaluate(s: &Surface, params: &Params, a: u32, b: u32) -> Option<Candidate> {
     let (fa, fb) = (s.flags[a as usize], s.flags[b as usize]);
@@ -96,8 +96,8 @@ pub(crate) fn evaluate(s: &Surface, params: &Params, a: u32, b: u32) -> Option<C
 }
 
 /// `error` (per unit area with `normalized_error`) times the enabled factors of Eq.
-/// 5: edge length, mean saliency weight. Inlined by force: LLVM kept it a call, made
-/// once per edge costed.
+/// 5: edge length, mean saliency weight. Inlined by force: LLVM kept it a call per edge
+/// costed (BENCHMARKS.md "Issue 40").
 #[inline(always)]
 fn cost_factors(s: &Surface, params: &Params, a: u32, b: u32, error: f64, pa: &Vec3, pb: &Vec3) -> f64 {
     let mut cost = error;
@@ -197,8 +197,7 @@ fn subset_error(s: &Surface, a: u32, b: u32, keep: u32) -> f64 {
 /// Optimal placement (single pose): the quadric's minimiser if well-conditioned and
 /// near the edge, else the best point of the segment, else the better endpoint. The
 /// slot kept is `seam_keeps` when the seam rule names one, else the nearer endpoint.
-/// Inlined by force, like every step of `try_collapse`, so that its AVX2 clone's
-/// features reach it (`collapse.rs`).
+/// Inlined by force into `try_collapse`'s clones (BENCHMARKS.md "Issue 40").
 #[inline(always)]
 fn place_optimally(s: &Surface, params: &Params, a: u32, b: u32, seam_keeps: Option<u32>) -> Candidate {
     let (pa, pb) = (s.positions[a as usize], s.positions[b as usize]);
@@ -209,9 +208,8 @@ fn place_optimally(s: &Surface, params: &Params, a: u32, b: u32, seam_keeps: Opt
 }
 
 /// The optimal placement of `(a, b)` (see [`place_optimally`]) and the merged
-/// quadric's error there: all that ranking needs. Inlined by force (into `cost_of`
-/// and `place_optimally`): as a call it returned the pair through memory (measured:
-/// −0.7 M instructions on SCAPE at c807891, where it had cost +0.3 M at f81532d).
+/// quadric's error there: all that ranking needs. Inlined by force: as a call it
+/// returned the pair through memory (BENCHMARKS.md "Issue 40").
 #[inline(always)]
 fn optimal_position(s: &Surface, params: &Params, a: u32, b: u32) -> (Vec3, f64) {
     // One slot count for both arrays (as in `costs_of`).
@@ -241,9 +239,8 @@ fn optimal_position(s: &Surface, params: &Params, a: u32, b: u32) -> (Vec3, f64)
 /// The cost of collapsing `(a, b)`, infinite when it may not collapse: what
 /// [`evaluate`] gives, without choosing the slot kept (the common case, an
 /// optimal quadric placement with neither endpoint pinned, has a short path; the seam
-/// rule changes only which slot an optimal placement keeps, not its cost). Inlined
-/// by force into the listing sweep (measured: −1.4 M instructions on SCAPE once
-/// `optimal_position` is inlined into it; no change at f81532d, when it was not).
+/// rule changes only which slot an optimal placement keeps, not its cost). Inlined by
+/// force into the listing's clones (BENCHMARKS.md "Issue 40").
 #[inline(always)]
 pub(crate) fn cost_of(s: &Surface, params: &Params, a: u32, b: u32) -> f64 {
     let full = || evaluate(s, params, a, b).map_or(f64::INFINITY, |c| c.cost);
@@ -265,7 +262,8 @@ pub(crate) fn cost_of(s: &Surface, params: &Params, a: u32, b: u32) -> f64 {
 /// the common case, a well-conditioned minimiser near the edge, in four lanes, and
 /// any lane off it (a frozen or pinned endpoint, the segment or endpoint fallback)
 /// by `cost_of` alone. For optimal quadric placement only; inlined by force into
-/// the listing sweep, whose AVX2 clone runs the lanes as vectors.
+/// the listing sweep, whose AVX2 clone runs the lanes as vectors (BENCHMARKS.md
+/// "Issue 40").
 #[inline(always)]
 pub(crate) fn costs_of(s: &Surface, params: &Params, edges: [[u32; 2]; 4]) -> [f64; 4] {
     // Optimal placement is single-pose only (`simplify_multipose` places on a subset).
@@ -285,8 +283,8 @@ pub(crate) fn costs_of(s: &Surface, params: &Params, edges: [[u32; 2]; 4]) -> [f
     let reach = Lanes::splat(params.max_placement_distance) * pa.distance(&pb);
     let (p, solved) = q.minimiser();
     let near = p.distance(&mid).le(reach);
-    // The lanes on the common path, both tests combined before the loop (−0.33 M
-    // instructions on SCAPE against `solved[l] && near[l]` in it).
+    // The lanes on the common path, both tests combined before the loop, not in it
+    // (BENCHMARKS.md "Issue 40").
     let common = four(|l| solved[l] && near[l]);
     let error = q.eval(&p);
     let flags = &s.flags[..positions.len()];
@@ -338,13 +336,13 @@ fn candidate_at(s: &Surface, a: u32, b: u32, position: Vec3, keep: u32) -> Candi
 /// `endpoint_error` by more than rounding ([`SNAP_TOLERANCE`]): only then is the vertex
 /// moved off its input position. The rule of `optimal_position` and of its lanes in
 /// `costs_of`.
-#[inline(always)]
+#[inline]
 fn beats_endpoint(error: f64, endpoint_error: f64) -> bool {
     endpoint_error > error * (1.0 + SNAP_TOLERANCE)
 }
 
 /// A ranked cost: finite, or `+inf` for an edge that may not collapse (NaN included).
-#[inline(always)]
+#[inline]
 fn finite_or_infinity(cost: f64) -> f64 {
     if cost.is_finite() { cost } else { f64::INFINITY }
 }

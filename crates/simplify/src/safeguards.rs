@@ -21,9 +21,7 @@ const DEGENERATE_RATIO: f64 = 1e-6;
 
 /// All safeguards for collapsing `remove` into `keep` at `position`: the seam rule, the
 /// link condition, then the geometry of every face that survives the collapse. `marks`
-/// is scratch.
-/// Inlined by force, like every step of `try_collapse`, so that its AVX2 clone's
-/// features reach it (`collapse.rs`).
+/// is scratch. Inlined by force into `try_collapse`'s clones (BENCHMARKS.md "Issue 40").
 #[inline(always)]
 pub(crate) fn check_collapse(
     s: &Surface,
@@ -95,9 +93,8 @@ pub(crate) fn seam_rule_allows_either(seams: Option<&SeamGraph>, flags: &[u8], a
 /// with boundary: the endpoints' common neighbours are exactly the apexes of the
 /// faces on the edge; an interior edge does not join two boundary vertices (that
 /// would pinch); and no apex is left with a degenerate fan (a closed fan of three
-/// faces — the tetrahedron case — or a single boundary face).
-/// Inlined by force, like every step of `try_collapse`, so that its AVX2 clone's
-/// features reach it (`collapse.rs`).
+/// faces — the tetrahedron case — or a single boundary face). Inlined by force into
+/// `try_collapse`'s clones (BENCHMARKS.md "Issue 40").
 #[inline(always)]
 pub(crate) fn link_condition_holds(
     lists: &FaceLists,
@@ -138,9 +135,8 @@ pub(crate) fn link_condition_holds(
 }
 
 /// The number of vertices adjacent to both `a` and `b`, `of_a` the set of `a`'s
-/// neighbours (and `a`).
-/// Inlined by force, like every step of `try_collapse`, so that its AVX2 clone's
-/// features reach it (`collapse.rs`).
+/// neighbours (and `a`). Inlined by force into `try_collapse`'s clones
+/// (BENCHMARKS.md "Issue 40").
 #[inline(always)]
 fn count_common_neighbours(
     lists: &FaceLists,
@@ -166,7 +162,7 @@ fn count_common_neighbours(
 /// not shared with `other` becomes degenerate, turns its normal past the threshold
 /// from before the collapse or from the input (`Flip`), or ends up too far from the
 /// input normals of the vertices at its corners (`Fold`, `max_corner_normal_deg`).
-/// Inlined by force into `check_collapse` (−1.2 M instructions on SCAPE).
+/// Inlined by force into `check_collapse` (BENCHMARKS.md "Issue 40").
 #[inline(always)]
 fn check_moved_faces(
     s: &Surface,

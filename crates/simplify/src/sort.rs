@@ -31,7 +31,7 @@ with_avx2_clone! {
     /// `PASS_ERROR_FACTOR` times the cost of the `needed`-th cheapest (capped by
     /// `PASS_GOAL_FRACTION`) and takes them all; an exhaustive one keeps every finite cost
     /// and stops at the target, usually early (SCAPE → 5000: after 1006 of 8878), so its
-    /// order is sorted as it is taken. Compiled twice (−0.2 M instructions on SCAPE).
+    /// order is sorted as it is taken. Compiled twice (BENCHMARKS.md "Issue 40").
     pub(crate) fn sort_edge_collapses(ranked: &EdgeCosts, needed: usize, pass: Pass) -> SortedCollapses {
         let count = ranked.chunks.iter().map(|c| c.costs.len()).sum::<usize>();
         let mut limit = f64::INFINITY;
@@ -45,7 +45,7 @@ with_avx2_clone! {
         let bound = if limit == f64::INFINITY { f64::MAX } else { limit };
         // Allocated once for every edge: no growth copies. The pages past the kept edges
         // are never written, so they cost address space, not memory (geo_1m's peak RSS
-        // did not move); counting the kept edges first cost 0.2 M more instructions.
+        // did not move); counting the kept edges first cost more (BENCHMARKS.md "Issue 40").
         let mut order: Vec<u128> = Vec::with_capacity(count);
         for c in &ranked.chunks {
             // Most edges fail the limit: the slot of a kept edge is found by a cursor that
@@ -131,7 +131,7 @@ const BUCKET_BITS: u32 = 12;
 /// exactly. Counting the costs per binade finds the binade that holds it; only that
 /// binade's costs are copied and selected in, so the pass's peak memory is not a copy
 /// of every cost (12 MB on a million faces). The counts are `u32`s on the stack (16 KB;
-/// a heap vector per call cost 0.1 M more instructions on SCAPE): 2³² edges would take
+/// a heap vector per call cost more, BENCHMARKS.md "Issue 40"): 2³² edges would take
 /// 2.9 G faces, 34 GB of indices alone.
 fn nth_smallest_cost(ranked: &EdgeCosts, n: usize) -> f64 {
     let bucket = |cost: f64| (total_order_key(cost) >> (64 - BUCKET_BITS)) as usize;
