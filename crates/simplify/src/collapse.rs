@@ -38,14 +38,15 @@ use std::time::Instant;
 use desal_mesh::{Progress, TriMesh, Vec3};
 
 use crate::classify::{ALIVE, BOUNDARY, FROZEN, PINNED, SEAM};
-use crate::config::{SimplifyConfig, Target};
+use crate::config::{Params, SimplifyConfig, Target};
 use crate::edges::{EdgeCosts, PassStamps, pick_and_rank_edge_collapses, upper_neighbours};
 use crate::error::SimplifyError;
 use crate::face_lists::FaceLists;
 use crate::marks::ScratchMarks;
-use crate::placement::{Candidate, Params, evaluate};
+use crate::placement::{Candidate, evaluate};
 use crate::report::{Refusal, Refusals, SimplifyReport, StopReason};
 use crate::safeguards::{check_collapse, seam_rule_allows_either};
+use crate::seams::SeamGraph;
 use crate::sort::{Pass, SortedCollapses, sort_edge_collapses, unpack_edge};
 use crate::surface::Surface;
 use crate::types::{Simplified, SimplifyInput};
@@ -288,7 +289,7 @@ fn choose_in_cost_order(
     order: SortedCollapses,
     wanted: usize,
     stamps: &mut PassStamps,
-    seams: Option<&crate::seams::SeamGraph>,
+    seams: Option<&SeamGraph>,
     flags: &[u8],
     refusals: &mut Refusals,
 ) -> Vec<u64> {

@@ -43,9 +43,9 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use crate::classify::{ALIVE, CHUNK, FROZEN};
-use crate::config::{Metric, Placement};
+use crate::config::{Metric, Params, Placement};
 use crate::face_lists::FaceLists;
-use crate::placement::{Params, cost_of, costs_of};
+use crate::placement::{cost_of, costs_of};
 use crate::surface::Surface;
 
 /// The live edges of one pass and their costs, chunk by chunk in slot order (see the

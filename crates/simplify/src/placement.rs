@@ -8,7 +8,7 @@
 use desal_mesh::Vec3;
 
 use crate::classify::{FROZEN, PINNED};
-use crate::config::{Metric, Placement, SimplifyConfig};
+use crate::config::{Metric, Params, Placement};
 use crate::lanes::{Lanes, Points, four};
 use crate::lindstrom_turk::Neighbourhood;
 use crate::quadric::Quadric4;
@@ -18,41 +18,6 @@ use crate::surface::Surface;
 /// Relative margin by which a computed placement must beat the better endpoint's error
 /// to be used instead of it (rounding noise must not move a vertex off its position).
 const SNAP_TOLERANCE: f64 = 1e-9;
-
-/// Settings the costs and safeguards read, derived once from the config.
-#[derive(Debug)]
-pub(crate) struct Params {
-    pub(crate) placement: Placement,
-    /// [`Metric::Quadric`] whenever there are several poses.
-    pub(crate) metric: Metric,
-    pub(crate) balance: bool,
-    pub(crate) cos_max_rotation: f64,
-    /// `-inf` when the corner-normal guard is off (180°).
-    pub(crate) cos_max_corner_normal: f64,
-    pub(crate) max_placement_distance: f64,
-    /// Quadric costs divided by the area their quadrics represent
-    /// ([`SimplifyConfig::normalized_error`](crate::SimplifyConfig::normalized_error)).
-    pub(crate) normalized_error: bool,
-}
-
-impl Params {
-    /// The settings of `config` for `pose_count` poses.
-    pub(crate) fn new(config: &SimplifyConfig, pose_count: usize) -> Self {
-        Params {
-            placement: config.placement,
-            metric: if pose_count == 1 { config.metric } else { Metric::Quadric },
-            balance: config.balance,
-            cos_max_rotation: config.max_normal_rotation_deg.to_radians().cos(),
-            cos_max_corner_normal: if config.max_corner_normal_deg >= 180.0 {
-                f64::NEG_INFINITY
-            } else {
-                config.max_corner_normal_deg.to_radians().cos()
-            },
-            max_placement_distance: config.max_placement_distance,
-            normalized_error: config.normalized_error,
-        }
-    }
-}
 
 /// One evaluated collapse: `remove` goes, `keep` moves to `position`.
 #[derive(Debug, Clone, Copy)]
@@ -395,9 +360,9 @@ fn nearer_endpoint(a: u32, b: u32, pa: &Vec3, pb: &Vec3, position: &Vec3) -> u32
 mod tests {
     use desal_mesh::{TriMesh, Vec3};
 
-    use super::{Params, cost_of, costs_of};
+    use super::{cost_of, costs_of, evaluate};
     use crate::classify::PINNED;
-    use crate::config::{Metric, PartBorders, SimplifyConfig};
+    use crate::config::{Metric, Params, PartBorders, SimplifyConfig};
     use crate::surface::Surface;
 
     /// A grid of `n × n` quads, flat except for a bump in its middle: flat regions have
@@ -472,6 +437,24 @@ mod tests {
             }
             assert!(singular > 0, "the flat part of the grid has singular quadrics");
             assert_eq!(pinned > 0, bit(3), "a locked border pins its vertices (mask {mask})");
+        }
+    }
+
+    /// The seam rule decides which endpoint an evaluation keeps: on a 3 × 3 grid with a
+    /// seam along its middle row (3–4–5), the centre 4 is inside the seam and may leave
+    /// only along it, so collapsing edge (1, 4) with border vertex 1, which may go
+    /// anywhere, removes 1 and keeps 4, both ways round.
+    #[test]
+    fn the_seam_rule_decides_the_endpoint_kept() {
+        let mesh = bumped_grid(2);
+        let seams = [[3, 4], [4, 5]];
+        let input = crate::SimplifyInput::new(&mesh).with_seams(&seams);
+        let config = SimplifyConfig::default();
+        let s = Surface::new(&[mesh.positions.as_slice()], 0, &input, mesh.faces.clone(), &config);
+        let params = Params::new(&config, 1);
+        for (a, b) in [(1, 4), (4, 1)] {
+            let kept = evaluate(&s, &params, a, b).expect("1 may go onto 4");
+            assert_eq!((kept.remove, kept.keep), (1, 4));
         }
     }
 }
