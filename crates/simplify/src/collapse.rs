@@ -243,6 +243,9 @@ fn perform_edge_collapses(
     match pass {
         Pass::Batched => {
             let wanted = target.remaining(engine).max(1);
+            // With seams, the walk in cost order, which refuses an edge the seam rule
+            // refuses both ways before it holds its endpoints; without, the same choice
+            // by rounds.
             let mut chosen = match &engine.surface.seams {
                 Some(seams) => choose_in_cost_order(
                     order,
