@@ -63,7 +63,7 @@ pub(crate) fn fill_face_planes(faces: &[[u32; 3]], positions: &[Vec3]) -> Vec<Fa
 
 with_avx2_clone! {
     /// [`fill_face_planes`] for one chunk of faces, compiled twice (`with_avx2_clone!`):
-    /// a loop per chunk where a closure per face was (−0.7 M instructions on SCAPE).
+    /// a loop per chunk where a closure per face was (BENCHMARKS.md "Issue 40").
     fn face_planes_chunk(planes: &mut [FacePlane], faces: &[[u32; 3]], positions: &[Vec3]) {
         for (plane, f) in planes.iter_mut().zip(faces) {
             let [a, b, c] = corners(f, positions);
@@ -81,7 +81,7 @@ pub(crate) fn compute_input_normals(faces: &[[u32; 3]], positions: &[Vec3]) -> V
 
 with_avx2_clone! {
     /// [`compute_input_normals`] for one chunk of faces, compiled twice
-    /// (`with_avx2_clone!`): a loop per chunk where a closure per face was (−0.45 M).
+    /// (`with_avx2_clone!`): a loop per chunk where a closure per face was.
     fn input_normals_chunk(normals: &mut [Vec3], faces: &[[u32; 3]], positions: &[Vec3]) {
         for (normal, f) in normals.iter_mut().zip(faces) {
             let [a, b, c] = corners(f, positions);
@@ -102,7 +102,7 @@ pub(crate) fn compute_vertex_normals(lists: &FaceLists, input_normals: &[Vec3]) 
 
 with_avx2_clone! {
     /// [`compute_vertex_normals`] for the slots from `first` on, compiled twice
-    /// (`with_avx2_clone!`): a loop per chunk where a closure per slot was (−0.3 M).
+    /// (`with_avx2_clone!`): a loop per chunk where a closure per slot was.
     fn vertex_normals_chunk(
         normals: &mut [Vec3],
         first: u32,
@@ -147,9 +147,9 @@ pub(crate) fn classify_vertices(input: &ClassifyInput<'_>) -> (Vec<u8>, Vec<Quad
 }
 
 /// [`classify_vertices`] for the vertices from `first` on, one per entry of `flags`. A
-/// function of its own, not the body of the parallel closure (−0.4 M instructions on
-/// SCAPE; its outputs are then reference arguments, which LLVM may assume alias
-/// nothing else).
+/// function of its own, not the body of the parallel closure: its outputs are then
+/// reference arguments, which LLVM may assume alias nothing else (BENCHMARKS.md
+/// "Issue 40").
 #[inline(never)]
 fn classify_chunk(input: &ClassifyInput<'_>, first: usize, flags: &mut [u8], quadrics: &mut [Quadric]) {
     let pose_count = input.poses.len();

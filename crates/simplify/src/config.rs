@@ -193,3 +193,39 @@ impl SimplifyConfig {
         }
     }
 }
+
+/// The settings the engine's costs and safeguards read, derived once from a
+/// [`SimplifyConfig`].
+#[derive(Debug)]
+pub(crate) struct Params {
+    pub(crate) placement: Placement,
+    /// [`Metric::Quadric`] whenever there are several poses.
+    pub(crate) metric: Metric,
+    pub(crate) balance: bool,
+    pub(crate) cos_max_rotation: f64,
+    /// `-inf` when the corner-normal guard is off (180°).
+    pub(crate) cos_max_corner_normal: f64,
+    pub(crate) max_placement_distance: f64,
+    /// Quadric costs divided by the area their quadrics represent
+    /// ([`SimplifyConfig::normalized_error`]).
+    pub(crate) normalized_error: bool,
+}
+
+impl Params {
+    /// The settings of `config` for `pose_count` poses.
+    pub(crate) fn new(config: &SimplifyConfig, pose_count: usize) -> Self {
+        Params {
+            placement: config.placement,
+            metric: if pose_count == 1 { config.metric } else { Metric::Quadric },
+            balance: config.balance,
+            cos_max_rotation: config.max_normal_rotation_deg.to_radians().cos(),
+            cos_max_corner_normal: if config.max_corner_normal_deg >= 180.0 {
+                f64::NEG_INFINITY
+            } else {
+                config.max_corner_normal_deg.to_radians().cos()
+            },
+            max_placement_distance: config.max_placement_distance,
+            normalized_error: config.normalized_error,
+        }
+    }
+}

@@ -2,14 +2,15 @@
 //! Every operation is element-wise and IEEE-exact, with no fused multiply-add, so a
 //! lane computes bit for bit what the scalar expression written in the same order
 //! does; LLVM turns the element-wise arrays into vector instructions in the AVX2
-//! clone of the listing sweep (`collapse.rs`), with no `unsafe` and no intrinsics.
+//! clone of the listing sweep (`edges.rs`), with no `unsafe` and no intrinsics.
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
 use desal_mesh::Vec3;
 
-/// `[f(0), f(1), f(2), f(3)]`, written out: `std::array::from_fn` and `[T; 4]::map`
-/// stayed calls per lane in the listing sweep (+8.5 M instructions on SCAPE).
+/// `[f(0), f(1), f(2), f(3)]`, written out and inlined by force: `std::array::from_fn`
+/// and `[T; 4]::map` stayed calls per lane in the listing sweep (BENCHMARKS.md
+/// "Issue 40").
 #[inline(always)]
 pub(crate) fn four<T>(mut f: impl FnMut(usize) -> T) -> [T; 4] {
     [f(0), f(1), f(2), f(3)]
@@ -20,44 +21,44 @@ pub(crate) fn four<T>(mut f: impl FnMut(usize) -> T) -> [T; 4] {
 pub(crate) struct Lanes(pub(crate) [f64; 4]);
 
 impl Lanes {
-    #[inline(always)]
+    #[inline]
     pub(crate) fn splat(x: f64) -> Self {
         Self([x; 4])
     }
 
     /// Lane `l` is `f(l)`.
-    #[inline(always)]
+    #[inline]
     pub(crate) fn from_fn(f: impl FnMut(usize) -> f64) -> Self {
         Self(four(f))
     }
 
-    #[inline(always)]
+    #[inline]
     fn map2(self, o: Self, f: impl Fn(f64, f64) -> f64) -> Self {
         let (a, b) = (self.0, o.0);
         Self([f(a[0], b[0]), f(a[1], b[1]), f(a[2], b[2]), f(a[3], b[3])])
     }
 
-    #[inline(always)]
+    #[inline]
     pub(crate) fn sqrt(self) -> Self {
         let a = self.0;
         Self([a[0].sqrt(), a[1].sqrt(), a[2].sqrt(), a[3].sqrt()])
     }
 
-    #[inline(always)]
+    #[inline]
     pub(crate) fn abs(self) -> Self {
         let a = self.0;
         Self([a[0].abs(), a[1].abs(), a[2].abs(), a[3].abs()])
     }
 
     /// Lane-wise `self > o` (false where either is NaN).
-    #[inline(always)]
+    #[inline]
     pub(crate) fn gt(self, o: Self) -> [bool; 4] {
         let (a, b) = (self.0, o.0);
         [a[0] > b[0], a[1] > b[1], a[2] > b[2], a[3] > b[3]]
     }
 
     /// Lane-wise `self <= o` (false where either is NaN).
-    #[inline(always)]
+    #[inline]
     pub(crate) fn le(self, o: Self) -> [bool; 4] {
         let (a, b) = (self.0, o.0);
         [a[0] <= b[0], a[1] <= b[1], a[2] <= b[2], a[3] <= b[3]]
@@ -66,7 +67,7 @@ impl Lanes {
 
 impl Add for Lanes {
     type Output = Self;
-    #[inline(always)]
+    #[inline]
     fn add(self, o: Self) -> Self {
         self.map2(o, |a, b| a + b)
     }
@@ -74,7 +75,7 @@ impl Add for Lanes {
 
 impl Sub for Lanes {
     type Output = Self;
-    #[inline(always)]
+    #[inline]
     fn sub(self, o: Self) -> Self {
         self.map2(o, |a, b| a - b)
     }
@@ -82,7 +83,7 @@ impl Sub for Lanes {
 
 impl Mul for Lanes {
     type Output = Self;
-    #[inline(always)]
+    #[inline]
     fn mul(self, o: Self) -> Self {
         self.map2(o, |a, b| a * b)
     }
@@ -90,7 +91,7 @@ impl Mul for Lanes {
 
 impl Div for Lanes {
     type Output = Self;
-    #[inline(always)]
+    #[inline]
     fn div(self, o: Self) -> Self {
         self.map2(o, |a, b| a / b)
     }
@@ -98,7 +99,7 @@ impl Div for Lanes {
 
 impl Neg for Lanes {
     type Output = Self;
-    #[inline(always)]
+    #[inline]
     fn neg(self) -> Self {
         let a = self.0;
         Self([-a[0], -a[1], -a[2], -a[3]])
@@ -116,27 +117,27 @@ pub(crate) struct Points {
 impl Points {
     /// Lane `l` is `*p[l]` (read in place: copying the points first costs a store and
     /// load each).
-    #[inline(always)]
+    #[inline]
     pub(crate) fn of(p: [&Vec3; 4]) -> Self {
         Self { x: Lanes::from_fn(|l| p[l].x), y: Lanes::from_fn(|l| p[l].y), z: Lanes::from_fn(|l| p[l].z) }
     }
 
     /// nalgebra's `dot`: `(x·x' + y·y') + z·z'`.
-    #[inline(always)]
+    #[inline]
     pub(crate) fn dot(&self, o: &Self) -> Lanes {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
 
     /// nalgebra's `norm`: `sqrt(0 + ((x² + y²) + z²))`, where `0 +` changes nothing (a
     /// sum of squares is never `-0`).
-    #[inline(always)]
+    #[inline]
     pub(crate) fn norm(&self) -> Lanes {
         self.dot(self).sqrt()
     }
 
     /// The lane-wise Euclidean norm of `self - o`, as nalgebra computes
     /// `(self - o).norm()`.
-    #[inline(always)]
+    #[inline]
     pub(crate) fn distance(&self, o: &Self) -> Lanes {
         (*self - *o).norm()
     }
@@ -144,7 +145,7 @@ impl Points {
 
 impl Sub for Points {
     type Output = Self;
-    #[inline(always)]
+    #[inline]
     fn sub(self, o: Self) -> Self {
         Self { x: self.x - o.x, y: self.y - o.y, z: self.z - o.z }
     }

@@ -34,6 +34,7 @@ mod api;
 mod classify;
 mod collapse;
 mod config;
+mod edges;
 mod error;
 mod face_lists;
 mod lanes;
@@ -45,6 +46,8 @@ pub mod quadric;
 mod report;
 mod safeguards;
 mod seams;
+mod sort;
+mod surface;
 mod types;
 
 pub use api::{simplify, simplify_multipose, simplify_with_progress};

@@ -136,7 +136,7 @@ impl Quadric {
     }
 
     /// `xᵀAx + 2bᵀx + c`: the weighted sum of squared distances to the planes. Inlined
-    /// by force, like [`Self::minimiser`].
+    /// by force into the engine's `try_collapse` clones (BENCHMARKS.md "Issue 40").
     #[inline(always)]
     pub fn eval(&self, p: &Vec3) -> f64 {
         let (x, y, z) = (p.x, p.y, p.z);
@@ -157,10 +157,8 @@ impl Quadric {
     }
 
     /// The point minimising the quadric, or `None` when `A` is near-singular (see
-    /// `DET_EPSILON`). Inlined by force: in the AVX2 clone of the engine's
-    /// `try_collapse` it stayed a call, run with the baseline features (−0.2 M
-    /// instructions on SCAPE; with `eval` inlined so too, −0.7 M).
-    #[inline(always)]
+    /// `DET_EPSILON`).
+    #[inline]
     pub fn minimiser(&self) -> Option<Vec3> {
         // Cofactors of the symmetric A; det by expansion along the first row.
         let c00 = self.a11 * self.a22 - self.a12 * self.a12;
@@ -221,7 +219,8 @@ pub(crate) struct Quadric4 {
 }
 
 impl Quadric4 {
-    /// Lane `l` is `pairs[l].0 + pairs[l].1`, added as `Quadric + Quadric` adds.
+    /// Lane `l` is `pairs[l].0 + pairs[l].1`, added as `Quadric + Quadric` adds. Inlined
+    /// by force into the listing's clones (BENCHMARKS.md "Issue 40").
     #[inline(always)]
     pub(crate) fn sums(pairs: [(&Quadric, &Quadric); 4]) -> Self {
         let sum = |f: fn(&Quadric) -> f64| Lanes::from_fn(|l| f(pairs[l].0) + f(pairs[l].1));
@@ -240,7 +239,7 @@ impl Quadric4 {
     }
 
     /// [`Quadric::eval`], lane-wise.
-    #[inline(always)]
+    #[inline]
     pub(crate) fn eval(&self, p: &Points) -> Lanes {
         let (x, y, z) = (p.x, p.y, p.z);
         let two = Lanes::splat(2.0);
@@ -251,7 +250,8 @@ impl Quadric4 {
     }
 
     /// [`Quadric::minimiser`], lane-wise: the points, and which lanes have one (lanes
-    /// without hold garbage).
+    /// without hold garbage). Inlined by force into the listing's clones
+    /// (BENCHMARKS.md "Issue 40").
     #[inline(always)]
     pub(crate) fn minimiser(&self) -> (Points, [bool; 4]) {
         let c00 = self.a11 * self.a22 - self.a12 * self.a12;
