@@ -63,35 +63,66 @@ fn the_rig_sample_simplifies_to_a_rig_with_its_skeleton_and_exact_weights() {
     let inputs: HashSet<Vec<u32>> = (0..original.mesh.vertex_count()).map(|v| key(&original, v)).collect();
     assert!((0..simplified.mesh.vertex_count()).all(|v| inputs.contains(&key(&simplified, v))));
     check_viewer(&folder);
+    check_wrong_local_three(dir.path(), &pipeline);
 }
 
-/// `view.html` and the vendored three.js files beside it: the files are the vendored
-/// bytes, and the page loads nothing over the network (every module an inlined `data:`
-/// URL, no `src`/`href` to fetch, no `http(s)://` outside the inlined base64).
+/// `view.html` as `desal run` writes it by default (issue 40): three.js is not copied
+/// beside it, and the page's import map loads every module from its pinned CDN URL with
+/// the pinned sha384 as its integrity; the rest of the page fetches nothing (no
+/// `src`/`href`, no `fetch`, no dynamic import, no URL but the CDN's in the error text).
 fn check_viewer(folder: &Path) {
-    use desal_rig::viewer::{MODULES, VENDORED};
-    for file in VENDORED {
-        let written = std::fs::read(folder.join("viewer/three").join(file.path)).unwrap();
-        assert!(written == file.bytes, "viewer/three/{} is not the vendored file", file.path);
-    }
+    use desal_rig::viewer::{MODULES, pin};
+    assert!(!folder.join("viewer").exists(), "no three.js files beside the page");
     let html = std::fs::read_to_string(folder.join("view.html")).unwrap();
     let opening = "<script type=\"importmap\">";
     let map_start = html.find(opening).expect("an import map") + opening.len();
     let map_end = map_start + html[map_start..].find("</script>").unwrap();
     let map: serde_json::Value = serde_json::from_str(&html[map_start..map_end]).unwrap();
-    let imports = map["imports"].as_object().unwrap();
-    assert_eq!(imports.len(), MODULES.len());
-    for (name, url) in imports {
-        assert!(url.as_str().unwrap().starts_with("data:text/javascript;base64,"), "{name} is not inlined");
+    let (imports, integrity) = (map["imports"].as_object().unwrap(), map["integrity"].as_object().unwrap());
+    assert_eq!((imports.len(), integrity.len()), (MODULES.len(), MODULES.len()));
+    let pin = pin();
+    for &(path, name) in MODULES {
+        let url = pin.url(path);
+        assert!(url.contains(&format!("/three@{}/", pin.version)), "{url} names the exact version");
+        assert_eq!(imports[name], url.as_str(), "{name}");
+        assert_eq!(integrity[&url], pin.sha384(path).unwrap(), "{url}");
     }
-    // Outside the base64 payloads (the import map and the rigs' JSON), the page's own text.
+    // Outside the import map and the rigs' JSON, the page's own text.
     let data_start = html.find("<script id=\"desal-data\"").unwrap();
     let data_end = data_start + html[data_start..].find("</script>").unwrap();
     let text = format!("{}{}{}", &html[..map_start], &html[map_end..data_start], &html[data_end..]);
-    for needle in ["http://", "https://", " src=", " href=", "fetch(", "import("] {
+    for needle in [" src=", " href=", "fetch(", "import("] {
         assert!(!text.contains(needle), "view.html contains {needle:?}");
     }
+    let cdn = pin.url("");
+    assert!(text.match_indices("http").all(|(at, _)| text[at..].starts_with(&cdn)), "only the CDN is named");
     assert!(html.contains("window.desalView"), "the test hook");
+}
+
+/// Issue 40: `DESAL_THREE` naming a folder that is not the pinned three.js fails the run
+/// before anything is written, naming the file and the version to install; and the page
+/// is part of the output folder's key, so an unchanged pipeline does not keep the
+/// default page in place when the variable asks for the offline one.
+fn check_wrong_local_three(dir: &Path, pipeline: &Path) {
+    let three = dir.join("three");
+    std::fs::create_dir_all(three.join("build")).unwrap();
+    std::fs::write(three.join("LICENSE"), "not three's licence\n").unwrap();
+    let page = dir.join("out/avatar/view.html");
+    let before = std::fs::read(&page).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_desal"))
+        .args(["run", pipeline.to_str().unwrap(), "--quiet"])
+        .env(desal_rig::viewer::THREE_ENV, &three)
+        .output()
+        .unwrap();
+    let message = stderr(&out);
+    assert!(!out.status.success(), "{message}");
+    let version = &desal_rig::viewer::pin().version;
+    assert!(
+        message.contains(&format!("{} is not the file of three {version}", three.join("LICENSE").display())),
+        "{message}"
+    );
+    assert!(message.contains(&format!("npm install three@{version}")), "{message}");
+    assert_eq!(std::fs::read(&page).unwrap(), before, "nothing written");
 }
 
 #[test]

@@ -62,9 +62,14 @@ pub fn write_tube_dataset(dir: &Path, extra_toml: &str) -> PathBuf {
     pipeline
 }
 
-/// Runs `desal` with `args`.
+/// Runs `desal` with `args`, writing the default viewer page whatever the caller's
+/// `DESAL_THREE` says.
 pub fn desal(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_desal")).args(args).output().expect("desal runs")
+    Command::new(env!("CARGO_BIN_EXE_desal"))
+        .args(args)
+        .env_remove(desal_rig::viewer::THREE_ENV)
+        .output()
+        .expect("desal runs")
 }
 
 pub fn stderr(out: &Output) -> String {

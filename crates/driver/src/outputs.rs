@@ -13,7 +13,7 @@
 //! | `hierarchy-<k>.dsa`, `hierarchy.npz`, `hierarchy.json` | with `[dataset.hierarchy]`: each level's cache entry, the npz of every level (`stages::hierarchy::npz_arrays`), the levels' summaries |
 //! | `hierarchy.png`, `upsampling-error.png`, `upsampling-error-<k>.ply` | with `[dataset.hierarchy]`: the levels side by side; the held-out per-vertex upsampling error of each level, fitted against barycentric (RMS, drawn and as PLY properties) |
 //! | `simplified.glb`, `simplified-rig.json` | with `[dataset.rig]`: the simplified rig (`stages::rig::simplified_glb`) and its figures |
-//! | `view.html`, `viewer/three/...` | with `[dataset.rig]`: both rigs side by side in three.js, and the vendored three.js files (`viewer.rs`) |
+//! | `view.html` | with `[dataset.rig]`: both rigs side by side in three.js, loaded from its pinned CDN URLs, or inlined from the package `DESAL_THREE` names (`viewer.rs`) |
 //! | `report.json` | the run's report, with `outputs_key` |
 //! | `eval/` | `desal eval`'s, kept across runs |
 
@@ -30,8 +30,9 @@ use crate::stages::runner::StageRecord;
 
 /// What the output writers write: part of [`outputs_key`], so that a folder written by
 /// an older desal is rewritten, not kept as in place. Bump it whenever a writer here
-/// adds, drops or changes a file. 2: the hierarchy figures and the rig viewer.
-pub const OUTPUTS_VERSION: u32 = 2;
+/// adds, drops or changes a file. 2: the hierarchy figures and the rig viewer. 3: the
+/// viewer's three.js from its CDN or `DESAL_THREE`, no `viewer/three/` copy.
+pub const OUTPUTS_VERSION: u32 = 3;
 
 /// `desal eval`'s folder inside a dataset's output folder: kept when `desal run` replaces
 /// the rest (it depends on the pipeline's inputs, not on the run's stage parameters).
@@ -310,7 +311,8 @@ pub fn write_all_or_nothing(files: Vec<(PathBuf, FileWriter)>) -> Result<()> {
 }
 
 /// Identifies a dataset's output folder content: every stage's cache key, plus what the
-/// derived files depend on beyond them (the picture's up axis, the desal version).
+/// derived files depend on beyond them (the picture's up axis, the desal version, and
+/// whether `view.html` loads three.js from its CDN or inlines `DESAL_THREE`'s).
 pub fn outputs_key(records: &[StageRecord], up_axis: Option<&str>) -> String {
     let keys: Vec<&str> = records.iter().map(|r| r.cache_key.as_str()).collect();
     let text = canonical_json(&serde_json::json!({
@@ -318,6 +320,7 @@ pub fn outputs_key(records: &[StageRecord], up_axis: Option<&str>) -> String {
         "up_axis": up_axis,
         "desal": env!("CARGO_PKG_VERSION"),
         "outputs": OUTPUTS_VERSION,
+        "three": desal_rig::viewer::three_key(desal_rig::viewer::three_dir_from_env().as_deref()),
     }));
     ContentHash::of(text.as_bytes()).to_hex()
 }

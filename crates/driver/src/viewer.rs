@@ -1,6 +1,6 @@
 //! `view.html` of a rig dataset: the full (input) rig and `simplified.glb` side by side in
-//! a self-contained three.js page (`desal_rig::viewer`), and the vendored three.js files
-//! written beside it as `viewer/three/...` (its sources and MIT licence).
+//! a three.js page (`desal_rig::viewer`), which loads the pinned three.js from its CDN, or
+//! inlines it from the local package `DESAL_THREE` names, for offline use.
 //!
 //! The full rig is the input as desal read it (the skinned mesh named by `rig.mesh`, its
 //! skeleton and animations), written by the one rig writer, `desal_rig::write_glb`: so
@@ -8,7 +8,7 @@
 //! `.gltf` input with external buffers needs no second loader.
 
 use anyhow::{Context, Result};
-use desal_rig::viewer::{VENDORED, ViewInput, view_html};
+use desal_rig::viewer::{ViewInput, three_dir_from_env, view_html};
 use desal_rig::{ReadOptions, Weld};
 
 use crate::stages::rig::{RigSource, SimplifiedRigSummary};
@@ -16,7 +16,7 @@ use crate::stages::rig::{RigSource, SimplifiedRigSummary};
 /// The page's file name in the output folder.
 pub const VIEW_HTML: &str = "view.html";
 
-/// `(relative path, bytes)` of `view.html` and of every vendored file beside it.
+/// `(relative path, bytes)` of `view.html`.
 pub fn view_files(
     rig: &RigSource,
     simplified_glb: &[u8],
@@ -31,9 +31,7 @@ pub fn view_files(
         summary.simplified_vertices,
         summary.weights,
     );
-    let page =
-        view_html(&ViewInput { title: &title, full_glb: &full_glb, simplified_glb, caption: &caption });
-    let mut files = vec![(VIEW_HTML.to_owned(), page.into_bytes())];
-    files.extend(VENDORED.iter().map(|f| (format!("viewer/three/{}", f.path), f.bytes.to_vec())));
-    Ok(files)
+    let input = ViewInput { title: &title, full_glb: &full_glb, simplified_glb, caption: &caption };
+    let page = view_html(&input, three_dir_from_env().as_deref())?;
+    Ok(vec![(VIEW_HTML.to_owned(), page.into_bytes())])
 }

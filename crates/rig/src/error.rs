@@ -78,4 +78,10 @@ pub enum RigError {
     Settings(String),
     #[error("simplified rig: {0}")]
     Output(String),
+    /// The local three.js package asked for an offline `view.html` (`DESAL_THREE`) lacks a
+    /// file the page uses, or holds another version's: `problem` names the file.
+    #[error(
+        "offline view.html: {problem}; it inlines npm three {version} from {dir}: run `npm install three@{version}` and give its node_modules/three folder"
+    )]
+    Three { dir: PathBuf, version: String, problem: String },
 }

@@ -18,7 +18,8 @@
 //! 5. [`simplified_rig`] then [`write_glb`]: the same skeleton, inverse bind matrices and
 //!    animations with the simplified mesh, seams kept, weights exact (subset placement)
 //!    or refitted (optimal placement).
-//! 6. [`viewer::view_html`]: a self-contained three.js page showing both rigs animated.
+//! 6. [`viewer::view_html`]: a three.js page showing both rigs animated, loading the
+//!    pinned three.js from its CDN, or inlining a local copy for offline use.
 //!
 //! Like `desal-sample`, this crate is not a stage: it knows a file format (glTF), the
 //! one exception to "`desal-io` knows every format", because the `gltf` crate is the

@@ -1,8 +1,9 @@
 // desal's rig viewer (view.html): the full (input) rig and the simplified rig side by
 // side, one clock driving both animations, a wireframe toggle and a caption with the
-// vertex counts. desal-rig's `viewer` module inlines this file, three.js (as data: URLs
-// of an import map) and both .glb files (base64, in #desal-data) into one page, so it
-// works opened from file:// with no server and no network.
+// vertex counts. desal-rig's `viewer` module inlines this file and both .glb files
+// (base64, in #desal-data) into one page, so it works opened from file:// with no
+// server; its import map loads three.js from the pinned CDN URLs (with integrity
+// hashes), or, for an offline page, from data: URLs of a local copy.
 //
 // three.js skins with JOINTS_0/WEIGHTS_0 only (four influences a vertex), and GLTFLoader
 // normalises those four to sum to 1. glTF allows more sets (JOINTS_1/WEIGHTS_1, ...), and
