@@ -34,7 +34,7 @@ old_desal=$(realpath "$1")
 new_desal=$(realpath "$2")
 old_py=${3:-${OLD_PY:-}}
 new_py=${4:-${NEW_PY:-}}
-if [ -n "$old_py" ] && [ -z "$new_py" ] || [ -z "$old_py" ] && [ -n "$new_py" ]; then usage; fi
+if { [ -n "$old_py" ] && [ -z "$new_py" ]; } || { [ -z "$old_py" ] && [ -n "$new_py" ]; }; then usage; fi
 for py in "$old_py" "$new_py"; do
   if [ -n "$py" ]; then "$py" -c 'import desal, numpy, scipy' || { echo "$py: no desal, numpy or scipy" >&2; exit 2; }; fi
 done
