@@ -14,9 +14,11 @@
 #      first, not measured), with MATURIN_PEP517_ARGS=--timings; the size of the installed
 #      `_desal*.so` (and stripped) and of the wheel maturin leaves in CARGO_TARGET_DIR/wheels.
 # Wall and CPU seconds (user + sys of everything the command ran) come from /usr/bin/time -v;
-# per-crate seconds from cargo's timing report (the UNIT_DATA of cargo-timing.html: each
-# unit's wall duration, so a loaded machine inflates them; CPU-seconds are the figure to
-# compare). The load average is sampled every 15 s throughout.
+# per-crate CPU-seconds from rustc_cpu.sh, a RUSTC_WRAPPER that times every rustc (the caller's
+# RUSTC_WRAPPER, e.g. sccache, is not used: the build must be cold); per-crate wall seconds from
+# cargo's timing report (the UNIT_DATA of cargo-timing.html: each unit's wall duration, which a
+# loaded machine inflates; CPU-seconds are the figures to compare). The load average is
+# sampled every 15 s throughout.
 # Writes OUT_DIR/compile_cost.md (the report), the timing HTML files, /usr/bin/time's
 # outputs and the build logs. COMPILE_COST_KEEP=1 keeps the temporary folder (printed);
 # COMPILE_COST_COMMIT=REV measures that commit of CHECKOUT_DIR's repository instead of HEAD.
@@ -25,6 +27,7 @@ set -euo pipefail
 checkout=$(cd "$1" && pwd)
 mkdir -p "$2"
 outdir=$(cd "$2" && pwd)
+rm -f "$outdir"/*.rustc-cpu  # appended to by rustc_cpu.sh
 here=$(cd "$(dirname "$0")" && pwd)
 commit=$(git -C "$checkout" rev-parse "${COMPILE_COST_COMMIT:-HEAD}^{commit}")
 tmp=$(mktemp -d /tmp/compile-cost.XXXXXX)
@@ -38,7 +41,9 @@ trap cleanup EXIT
 git clone -q --no-hardlinks "$checkout" "$tmp/desal"
 git -C "$tmp/desal" checkout -q --detach "$commit"
 if [ -d "$checkout/../shared" ]; then ln -s "$(cd "$checkout/../shared" && pwd)" "$tmp/shared"; fi
-unset DESAL_REQUIRE_SHARED_DATA CARGO_BUILD_TARGET_DIR
+unset DESAL_REQUIRE_SHARED_DATA CARGO_BUILD_TARGET_DIR CARGO_BUILD_RUSTC_WRAPPER
+caller_wrapper=${RUSTC_WRAPPER:-}
+export RUSTC_WRAPPER=$here/rustc_cpu.sh
 cd "$tmp/desal"
 
 {
@@ -49,7 +54,7 @@ cd "$tmp/desal"
   rustc -V
   cargo -V
   python3 -V
-  echo "RUSTFLAGS=${RUSTFLAGS:-} RUSTC_WRAPPER=${RUSTC_WRAPPER:-}"
+  echo "RUSTFLAGS=${RUSTFLAGS:-} RUSTC_WRAPPER=$caller_wrapper (replaced by rustc_cpu.sh)"
 } >"$outdir/environment.txt"
 uptime >"$outdir/load-start.txt"
 (while sleep 15; do echo "$(date +%s) $(cut -d' ' -f1-3 /proc/loadavg)"; done) >"$outdir/load-samples.txt" &
@@ -58,11 +63,11 @@ sampler=$!
 # (a) The README's main job, cold.
 export CARGO_TARGET_DIR=$tmp/target
 echo "(a) cargo run --release -- run pipelines/sample.toml, cold ..." >&2
-/usr/bin/time -v -o "$outdir/main-job.time" cargo run --release --timings -- run pipelines/sample.toml \
+RUSTC_CPU_LOG=$outdir/main-job.rustc-cpu /usr/bin/time -v -o "$outdir/main-job.time" cargo run --release --timings -- run pipelines/sample.toml \
   >"$outdir/main-job.log" 2>&1 || { tail -30 "$outdir/main-job.log" >&2; exit 1; }
 cp "$CARGO_TARGET_DIR/cargo-timings/cargo-timing.html" "$outdir/main-job-timing.html"
 echo "(a) cargo build --release, after it ..." >&2
-/usr/bin/time -v -o "$outdir/all-bins.time" cargo build --release --timings \
+RUSTC_CPU_LOG=$outdir/all-bins.rustc-cpu /usr/bin/time -v -o "$outdir/all-bins.time" cargo build --release --timings \
   >"$outdir/all-bins.log" 2>&1 || { tail -30 "$outdir/all-bins.log" >&2; exit 1; }
 cp "$CARGO_TARGET_DIR/cargo-timings/cargo-timing.html" "$outdir/all-bins-timing.html"
 
@@ -71,7 +76,7 @@ echo "(b) pip install ./crates/python, cold ..." >&2
 python3 -m venv "$tmp/venv"
 "$tmp/venv/bin/pip" install -q numpy >"$outdir/python-numpy.log" 2>&1
 export CARGO_TARGET_DIR=$tmp/target-python
-MATURIN_PEP517_ARGS=--timings /usr/bin/time -v -o "$outdir/python.time" "$tmp/venv/bin/pip" install -v ./crates/python \
+MATURIN_PEP517_ARGS=--timings RUSTC_CPU_LOG=$outdir/python.rustc-cpu /usr/bin/time -v -o "$outdir/python.time" "$tmp/venv/bin/pip" install -v ./crates/python \
   >"$outdir/python.log" 2>&1 || { tail -30 "$outdir/python.log" >&2; exit 1; }
 cp "$CARGO_TARGET_DIR/cargo-timings/cargo-timing.html" "$outdir/python-timing.html"
 so=$(find "$tmp/venv" -name '_desal*.so' | head -1)

@@ -3,12 +3,14 @@
 
 Usage: compile_cost_report.py OUT_DIR > OUT_DIR/compile_cost.md
 
-Per-crate figures come from the UNIT_DATA array cargo embeds in cargo-timing.html (stable
-cargo has no JSON timing output): each unit's `duration` (wall seconds from its start to its
-end, codegen included), summed over a package's units (lib, build script compile and run,
-bins). They are wall times per unit, so load from other processes inflates them, and a
-unit's codegen threads can make its CPU time exceed them; the CPU-seconds of the whole
-command (user + sys, /usr/bin/time -v) are the figure to compare between builds.
+Per-crate CPU-seconds come from rustc_cpu.sh's logs (user + sys of every rustc run for the
+package: lib, bins, build script compile; the linker included). Per-crate wall seconds come
+from the UNIT_DATA array cargo embeds in cargo-timing.html (stable cargo has no JSON timing
+output): each unit's `duration`, summed over a package's units (build script runs too).
+Load from other processes inflates wall seconds, not CPU-seconds; CPU-seconds are the
+figures to compare between builds. What rustc does not account for (cargo, build script
+runs such as meshopt's C++ compile through cc, and for (a) the run itself) is the command's
+CPU-seconds less rustc's.
 """
 
 import collections
@@ -55,6 +57,24 @@ def units(name: str) -> list:
     return json.loads(m.group(1))
 
 
+def rustc_cpu(name: str) -> collections.Counter:
+    """Package -> CPU-seconds of its rustc runs, from rustc_cpu.sh's log."""
+    sums = collections.Counter()
+    path = OUT / name
+    if not path.exists():
+        return sums
+    for line in path.read_text().splitlines():
+        fields = line.split()
+        if len(fields) != 5:
+            continue  # "Command exited with non-zero status N"
+        try:
+            user, system = float(fields[2]), float(fields[3])
+        except ValueError:
+            continue
+        sums[fields[0]] += user + system
+    return sums
+
+
 def per_crate(data: list) -> collections.Counter:
     sums = collections.Counter()
     for u in data:
@@ -75,27 +95,34 @@ def fmt_mb(n: int) -> str:
     return f"{n / 1e6:.1f} MB ({n / 2**20:.1f} MiB)"
 
 
-def table(title: str, timing: str) -> list:
-    data = units(timing)
-    sums = per_crate(data)
-    total = sum(sums.values())
-    info = summary_of(timing)
+def table(title: str, stem: str, command_cpu: float) -> list:
+    data = units(f"{stem}-timing.html")
+    wall = per_crate(data)
+    cpu = rustc_cpu(f"{stem}.rustc-cpu")
+    cpu.pop("-", None)
+    info = summary_of(f"{stem}-timing.html")
+    total_cpu, total_wall = sum(cpu.values()), sum(wall.values())
     lines = [
-        f"#### {title}: crates by summed unit seconds (top {TOP} of {len(sums)})",
+        f"#### {title}: crates by rustc CPU-seconds (top {TOP} of {len(wall)})",
         "",
         f"{len(data)} units ({info['Fresh units']} fresh, {info['Dirty units']} dirty), cargo's total time "
-        f"{info['Total time']}, {info['Max concurrency']}, profile {info['Profile']}; "
-        f"unit seconds summed: {total:.1f} s.",
+        f"{info['Total time']}, {info['Max concurrency']}, profile {info['Profile']}. "
+        f"rustc CPU-seconds: {total_cpu:.1f} s of the command's {command_cpu:.1f} s (the rest, "
+        f"{command_cpu - total_cpu:.1f} s: cargo, build script runs with their C/C++, pip and maturin); "
+        f"unit wall seconds summed: {total_wall:.1f} s.",
         "",
-        "| crate | unit s | share |",
-        "|---|---:|---:|",
+        "| crate | CPU s (rustc) | share of rustc CPU | unit wall s |",
+        "|---|---:|---:|---:|",
     ]
-    for crate, secs in sums.most_common(TOP):
-        lines.append(f"| {crate} | {secs:.1f} | {100 * secs / total:.1f} % |")
+    ranked = cpu.most_common(TOP) if cpu else wall.most_common(TOP)
+    for crate, _ in ranked:
+        share = f"{100 * cpu[crate] / total_cpu:.1f} %" if total_cpu else "?"
+        lines.append(f"| {crate} | {cpu[crate]:.1f} | {share} | {wall[crate]:.1f} |")
     families = [
-        f"{f}* {sum(s for c, s in sums.items() if c.startswith(f)):.1f} s"
+        f"{f}* {sum(s for c, s in cpu.items() if c.startswith(f)):.1f} s CPU"
+        f" ({sum(s for c, s in wall.items() if c.startswith(f)):.1f} s wall)"
         for f in FAMILIES
-        if any(c.startswith(f) for c in sums)
+        if any(c.startswith(f) for c in wall)
     ]
     if families:
         lines += ["", "Families (every crate whose name starts so): " + ", ".join(families) + "."]
@@ -152,8 +179,8 @@ def main() -> None:
         "",
         "## Crates that dominate",
         "",
-        *table("(a) main job", "main-job-timing.html"),
-        *table("(b) Python package", "python-timing.html"),
+        *table("(a) main job", "main-job", main_job["cpu"]),
+        *table("(b) Python package", "python", python["cpu"]),
         "Files beside this report: the cargo timing pages (`*-timing.html`), /usr/bin/time's outputs "
         "(`*.time`), the build logs and the load samples.",
     ]
