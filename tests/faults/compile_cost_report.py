@@ -108,7 +108,8 @@ def table(title: str, stem: str, command_cpu: float) -> list:
         f"{len(data)} units ({info['Fresh units']} fresh, {info['Dirty units']} dirty), cargo's total time "
         f"{info['Total time']}, {info['Max concurrency']}, profile {info['Profile']}. "
         f"rustc CPU-seconds: {total_cpu:.1f} s of the command's {command_cpu:.1f} s (the rest, "
-        f"{command_cpu - total_cpu:.1f} s: cargo, build script runs with their C/C++, pip and maturin); "
+        f"{command_cpu - total_cpu:.1f} s: cargo, build script runs with their C/C++ such as meshoptimizer's, "
+        f"and the run for (a), pip and maturin for (b)); "
         f"unit wall seconds summed: {total_wall:.1f} s.",
         "",
         "| crate | CPU s (rustc) | share of rustc CPU | unit wall s |",
