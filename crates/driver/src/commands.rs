@@ -7,7 +7,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use desal_io::artifact::{self, ArtifactBody, FitV1, LabelsV1, PoseSetV1, SaliencyV1};
 use desal_mesh::NoProgress;
-use desal_simplify::{Metric, Placement, SimplifyConfig};
+use desal_simplify::{Metric, Placement};
+// The flags' defaults (`default_value_t`) are the library's.
+#[cfg(feature = "cli")]
+use desal_simplify::SimplifyConfig;
 
 use crate::outputs::{FileWriter, write_all_or_nothing};
 use crate::stages;
