@@ -39,7 +39,7 @@ use desal_eval::deform::{self, DeformError};
 use desal_eval::{PoseModel, SurfaceIndex};
 use desal_map::{MapConfig, MapError, MapMode, MapOutput};
 use desal_mesh::{Face, NoProgress, PartLabels, PoseSet, TriMesh, Vec3};
-use desal_simplify::{PartBorders, Simplified, SimplifyConfig, SimplifyError, SimplifyInput};
+use desal_simplify::{Simplified, SimplifyConfig, SimplifyError, SimplifyInput};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -62,7 +62,8 @@ pub enum RefitError {
     Map(#[source] MapError),
     #[error("desal-refit: the first run's residual")]
     Residual(#[source] DeformError),
-    #[error("desal-refit: the edge flips need subset placement (every vertex an original one)")]
+    /// desal-refit maps and flips by original vertex: every simplified vertex must be one.
+    #[error("desal-refit needs subset placement (every simplified vertex an original one)")]
     NotSubset,
 }
 
@@ -197,20 +198,17 @@ impl Refit<'_> {
     pub fn simplify(&self, config: &SimplifyConfig) -> Result<Refitted> {
         let template = self.poses.template_mesh();
         let penalty = self.full.keep_penalty();
-        let run = |config: &SimplifyConfig, weights: &[f64], run: &'static str| {
-            let mut input = SimplifyInput::new(&template).with_keep_penalty(&penalty);
-            if let Some(seams) = self.seams {
-                input = input.with_seams(seams);
-            }
-            if config.saliency {
-                input = input.with_weights(weights);
-            }
-            if config.part_borders != PartBorders::Ignore {
-                input = input.with_part_labels(&self.labels.labels);
-            }
-            desal_simplify::simplify_with_progress(&input, config, &NoProgress)
-                .map_err(|source| RefitError::Simplify { run, source })
-        };
+        let run =
+            |config: &SimplifyConfig, weights: &[f64], run: &'static str| {
+                let mut input = SimplifyInput::new(&template)
+                    .with_keep_penalty(&penalty)
+                    .with_inputs_read_by(config, weights, &self.labels.labels);
+                if let Some(seams) = self.seams {
+                    input = input.with_seams(seams);
+                }
+                desal_simplify::simplify_with_progress(&input, config, &NoProgress)
+                    .map_err(|source| RefitError::Simplify { run, source })
+            };
         // The first run reads no weights (`desal` has no saliency factor).
         let first = run(config, &[], "first")?;
         let mapped = map_subset(&first, self.poses, self.labels)?;

@@ -2,6 +2,8 @@
 
 use desal_mesh::TriMesh;
 
+use crate::config::{PartBorders, SimplifyConfig};
+
 use crate::report::SimplifyReport;
 
 /// The data one simplification reads.
@@ -53,6 +55,15 @@ impl<'a> SimplifyInput<'a> {
     /// Adds attribute seams (see [`SimplifyInput::seams`]).
     pub fn with_seams(self, seams: &'a [[u32; 2]]) -> Self {
         Self { seams: Some(seams), ..self }
+    }
+
+    /// Adds the per-vertex inputs `config` reads, and only those: the saliency weights
+    /// when its saliency factor is on, the part labels when it does not ignore part
+    /// borders. The one rule for callers that hold both (`desal run`'s stage 3, both
+    /// runs of desal-refit).
+    pub fn with_inputs_read_by(self, config: &SimplifyConfig, weights: &'a [f64], labels: &'a [u32]) -> Self {
+        let input = if config.saliency { self.with_weights(weights) } else { self };
+        if config.part_borders != PartBorders::Ignore { input.with_part_labels(labels) } else { input }
     }
 }
 

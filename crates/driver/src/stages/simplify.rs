@@ -1,7 +1,8 @@
 //! Stage 3: its parameters and their validation, its cache key, and the one path into
 //! `desal-simplify` that `desal run`, `desal simplify` and every `desal eval` method
-//! share (which inputs get the weights, the labels and the seams, the artifact
-//! conversion).
+//! share (the seams, the artifact conversion; which of the weights and labels the
+//! engine reads is `SimplifyInput::with_inputs_read_by`'s rule, which desal-refit
+//! shares).
 
 use anyhow::{Result, bail};
 use desal_io::artifact::{ArtifactKind, ContentHash, SimplifiedV1};
@@ -539,32 +540,9 @@ pub fn compute_with_seams(
     seams: Option<&[[u32; 2]]>,
     progress: &dyn desal_mesh::Progress,
 ) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
-    compute_with_keep_penalty(config, template, weights, labels, seams, None, progress)
-}
-
-/// [`compute_with_seams`] with per-vertex keep penalties for subset placement
-/// (`desal eval`'s `desal-refit`; `SimplifyInput::keep_penalty`), or none.
-pub fn compute_with_keep_penalty(
-    config: &SimplifyConfig,
-    template: &TriMesh,
-    weights: &[f64],
-    labels: &PartLabels,
-    seams: Option<&[[u32; 2]]>,
-    keep_penalty: Option<&[f64]>,
-    progress: &dyn desal_mesh::Progress,
-) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
-    let mut input = SimplifyInput::new(template);
+    let mut input = SimplifyInput::new(template).with_inputs_read_by(config, weights, &labels.labels);
     if let Some(seams) = seams {
         input = input.with_seams(seams);
-    }
-    if let Some(penalty) = keep_penalty {
-        input = input.with_keep_penalty(penalty);
-    }
-    if config.saliency {
-        input = input.with_weights(weights);
-    }
-    if config.part_borders != PartBorders::Ignore {
-        input = input.with_part_labels(&labels.labels);
     }
     let result = desal_simplify::simplify_with_progress(&input, config, progress)?;
     Ok(output(config, Cost::of(config).name(), &result))
