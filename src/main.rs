@@ -147,7 +147,10 @@ fn run(cli: Cli) -> Result<()> {
             let keep =
                 runs.iter().flat_map(|r| r.report.stages.iter().map(|s| s.cache_key.clone())).collect();
             // `desal eval`'s floors of these pose sets and labels are kept too.
-            let inputs = runs.iter().flat_map(|r| [r.stages.poses.hash, r.stages.labels.hash]).collect();
+            let inputs = runs
+                .iter()
+                .flat_map(|r| [r.stages.poses.hash(), r.stages.labels.hash()])
+                .collect::<anyhow::Result<_>>()?;
             let (kept, removed, freed) = cache.gc(&keep, desal_experiment::floor::STAGE, &inputs)?;
             desal_driver::print_out(&format!(
                 "{}: kept {kept} entries, removed {removed} ({:.1} MB)\n",

@@ -466,14 +466,7 @@ fn desal_refit_moves_vertices_to_where_desal_deforms_worse_than_the_full_mesh() 
         let mut params = desal_driver::memory::StageParams::default();
         params.simplify.target_vertices = Some(target);
         params.simplify.method = Some(desal_driver::stages::simplify::Method::DesalRefit);
-        desal_driver::memory::simplify_pose_set(
-            &params,
-            &set,
-            &labels,
-            desal_driver::memory::Stage3::Template,
-            &desal_mesh::NoProgress,
-        )
-        .unwrap()
+        desal_driver::memory::simplify_pose_set(&params, &set, &labels, &desal_mesh::NoProgress).unwrap()
     };
     let ours = library(SAMPLE_TARGET);
     let (posed, _) = desal_driver::memory::apply_map(&ours.map.body, &set, &labels).unwrap();

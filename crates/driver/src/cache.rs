@@ -34,6 +34,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
 use desal_io::artifact::{self, ArtifactBody, ContentHash, InputRef, Producer};
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 /// How long a reader waits for a cache entry's file that another run is replacing.
@@ -207,12 +208,33 @@ pub struct Cache {
     root: PathBuf,
 }
 
+/// A summary as the cache stores it in `summary.json`: the stage's fields plus the note.
+#[derive(Debug, Serialize, Deserialize)]
+pub struct StoredSummary<S> {
+    #[serde(flatten)]
+    pub summary: S,
+    pub note: String,
+}
+
+/// What [`Cache::serve`] found or stored.
+#[derive(Debug)]
+pub struct Served<T, S> {
+    /// The artifact's content hash and file.
+    pub hash: ContentHash,
+    pub artifact: PathBuf,
+    pub stored: StoredSummary<S>,
+    /// The body when it was computed; a hit's is decoded from `artifact` on demand.
+    pub body: Option<T>,
+    /// Why the cache missed; `None` on a hit.
+    pub miss_reason: Option<String>,
+}
+
 /// A cache entry found, with its envelope verified (magic, kind, version, length,
 /// checksum). The body is decoded later, only if something needs it.
 #[derive(Debug)]
 pub struct Hit {
     pub hash: ContentHash,
-    /// The bytes of the entry's `summary.json` (parsed, typed, by the stage runner).
+    /// The bytes of the entry's `summary.json` (parsed, typed, by [`Cache::serve`]).
     pub summary: Vec<u8>,
 }
 
@@ -364,6 +386,44 @@ impl Cache {
         } else {
             diffs.join("; ")
         }
+    }
+
+    /// Serves one stage of `dataset`: the entry under `key` when there is one whose
+    /// summary parses as `S` (unless `forced`), else `compute`d and stored, after
+    /// `on_miss` is told why the cache missed. Records `key` as the stage's last run
+    /// either way. An entry whose summary does not parse is corrupt: it is evicted and
+    /// recomputed, like one that fails its checksum.
+    pub fn serve<T: ArtifactBody, S: Serialize + DeserializeOwned>(
+        &self,
+        dataset: &str,
+        key: &StageKey,
+        hints: &[(String, String)],
+        forced: bool,
+        on_miss: impl FnOnce(&str),
+        compute: impl FnOnce() -> Result<(T, StoredSummary<S>)>,
+    ) -> Result<Served<T, S>> {
+        let artifact = self.entry_dir(key).join("artifact.dsa");
+        if !forced && let Some(hit) = self.lookup::<T>(key) {
+            match serde_json::from_slice::<StoredSummary<S>>(&hit.summary) {
+                Ok(stored) => {
+                    self.record(dataset, key)?;
+                    return Ok(Served { hash: hit.hash, artifact, stored, body: None, miss_reason: None });
+                }
+                Err(e) => {
+                    self.reject(key, &format!("{}: {e}", artifact.with_file_name("summary.json").display()))
+                }
+            }
+        }
+        let reason =
+            if forced { "forced (--force or --from)".to_owned() } else { self.explain_miss(dataset, key) };
+        on_miss(&reason);
+        let (body, stored) = compute()?;
+        if forced {
+            self.evict(key);
+        }
+        let hash = self.store(key, &key.producer(hints), &body, &stored)?;
+        self.record(dataset, key)?;
+        Ok(Served { hash, artifact, stored, body: Some(body), miss_reason: Some(reason) })
     }
 
     /// Records `key` as the last run of its stage for `dataset`.

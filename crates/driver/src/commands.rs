@@ -411,7 +411,7 @@ pub struct HierarchyArgs {
 }
 
 pub fn hierarchy(args: &HierarchyArgs) -> Result<()> {
-    use stages::hierarchy::{HierarchyParams, HierarchyReport, LevelSettings, compute_level, npz_arrays};
+    use stages::hierarchy::{HierarchyParams, HierarchyReport};
     let (poses, _) = read::<PoseSetV1>(&args.poses)?;
     let (labels, _) = read::<LabelsV1>(&args.labels)?;
     let set = poses.to_pose_set().with_context(|| format!("{}", args.poses.display()))?;
@@ -425,21 +425,15 @@ pub fn hierarchy(args: &HierarchyArgs) -> Result<()> {
         heldout_v2f: args.heldout_v2f,
     };
     params.config()?;
-    params.check_levels(Some(set.vertex_count()))?;
-    let simplify = stages::simplify::SimplifyParams { balance: args.balance, ..Default::default() };
-    let (fit, saliency) = (FitParams::default(), SaliencyParams::default());
-    let settings = LevelSettings { fit: &fit, saliency: &saliency, simplify: &simplify, hierarchy: &params };
-    let mut levels = Vec::new();
-    for _ in &params.levels {
-        let parents: Vec<_> = levels.iter().map(|l: &stages::runner::StageOutput<_, _>| &l.body).collect();
-        let level = compute_level(&settings, &set, &labels, &parents, &NoProgress)?;
-        eprintln!("{}", level.note);
-        levels.push(level);
+    let stage = crate::memory::StageParams {
+        simplify: stages::simplify::SimplifyParams { balance: args.balance, ..Default::default() },
+        ..Default::default()
+    };
+    let (arrays, summaries) = crate::memory::hierarchy(&stage, &params, &set, &labels, &NoProgress)?;
+    for level in &summaries {
+        eprintln!("{}", level.note());
     }
-    let bodies: Vec<_> = levels.iter().map(|l| &l.body).collect();
-    let arrays = npz_arrays(set.vertex_count(), &set.faces, &bodies)?;
-    let report =
-        HierarchyReport::new(arrays.levels.clone(), args.upsampler_name(), levels.iter().map(|l| &l.summary));
+    let report = HierarchyReport::new(arrays.levels.clone(), args.upsampler_name(), &summaries);
     let report = serde_json::to_value(&report)?;
     let mut files: Vec<(PathBuf, FileWriter)> =
         vec![(args.output.clone(), Box::new(move |p| Ok(desal_io::npz::write_hierarchy_npz(p, &arrays)?)))];

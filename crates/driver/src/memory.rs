@@ -1,28 +1,30 @@
 //! The stages on arrays already in memory, for library callers and the Python package
-//! (`crates/python`): the checks of ingest and the labels stage, and the stage chain of
-//! [`crate::stages::run_stages`], without files or the cache.
+//! (`crates/python`): the checks of ingest and the labels stage, and the one stage chain
+//! and level loop of `desal run` over the [`Memory`] store, without files or the cache.
 //!
 //! **Invariant:** the same arrays give the same bytes as `desal run`. Positions pass
-//! through the pose-set artifact's f32 (`PoseSetV1`), as `desal run`'s do, and every
-//! stage is computed by the same `stages::*::compute` call in the same order.
+//! through the pose-set artifact's f32 (`PoseSetV1`), as `desal run`'s do, and the
+//! stages are chained by the same functions (`stages::chain`, `stages::hierarchy::levels`).
 
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
-use desal_io::artifact::{FitV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1};
+use desal_io::artifact::{FitV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1};
 use desal_io::npz::HierarchyArrays;
 use desal_mesh::validate::clean_faces;
 use desal_mesh::{FaceCleanup, PartLabels, PoseSet, Progress};
 
+use crate::stages::chain::{Chain, ChainInput, ChainSettings, chain};
 use crate::stages::fit::{FitParams, FitSummary};
 use crate::stages::hierarchy::{self, HierarchyParams, LevelSettings, LevelSummary};
 use crate::stages::ingest::{IngestSummary, LabelsSummary};
 use crate::stages::map::{self, MapSummary};
 use crate::stages::parts::{self, PartsParams, PartsSummary};
 use crate::stages::rig::{RigInput, RigParams, SimplifiedRigSummary};
-use crate::stages::runner::StageOutput;
+use crate::stages::runner::{Memory, StageOutput};
 use crate::stages::saliency::{SaliencyParams, SaliencySummary};
-use crate::stages::simplify::{self, SimplifyParams, SimplifySummary};
+use crate::stages::seams::SeamEdges;
+use crate::stages::simplify::{SimplifyParams, SimplifySummary};
 
 /// A pose set built from arrays: validated as ingest validates pose files.
 #[derive(Debug, Clone)]
@@ -101,6 +103,13 @@ pub struct StageParams {
     pub simplify: SimplifyParams,
 }
 
+impl StageParams {
+    /// The chain's view of them.
+    pub fn chain(&self) -> ChainSettings<'_> {
+        ChainSettings { fit: &self.fit, saliency: &self.saliency, simplify: &self.simplify }
+    }
+}
+
 /// Stages 1–4 of one pose set, computed.
 #[derive(Debug, Clone)]
 pub struct Simplification {
@@ -129,61 +138,33 @@ pub fn saliency(
     crate::stages::saliency::compute(params, fit, set.template_mesh().diagonal())
 }
 
-/// Which stage 3 [`simplify_pose_set`] runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Stage3 {
-    /// Stage 3 as `desal run` runs it: the configured method (`[simplify] method`:
-    /// `desal`, or `desal-refit`, which gives the mesh `desal eval` gives for the same
-    /// pose set, labels and target), else the template's quadrics with the configured
-    /// cost.
-    Template,
-    /// Multi-pose QEM (`desal eval`'s `multipose`, subset placement), no saliency.
-    Multipose,
-}
-
-/// Stages 1–4, in `desal run`'s order ([`crate::stages::run_stages`]), with stage 3 as
-/// `stage3` says.
+/// Stages 1–4, in `desal run`'s order: the one chain (`stages::chain`), in memory.
 pub fn simplify_pose_set(
     params: &StageParams,
     set: &PoseSet,
     labels: &PartLabels,
-    stage3: Stage3,
     progress: &dyn Progress,
 ) -> Result<Simplification> {
-    simplify_with_seams(params, set, labels, stage3, None, progress)
+    simplify_with_seams(params, set, labels, None, progress)
 }
 
 /// [`simplify_pose_set`] with the template's attribute seams handed to stage 3 (a rig's,
-/// as `desal run` hands them; `multipose` takes none).
+/// as `desal run` hands them).
 fn simplify_with_seams(
     params: &StageParams,
     set: &PoseSet,
     labels: &PartLabels,
-    stage3: Stage3,
-    seams: Option<&[[u32; 2]]>,
+    seams: Option<&SeamEdges>,
     progress: &dyn Progress,
 ) -> Result<Simplification> {
-    let config = params.simplify.config()?;
-    let fit = fit(&params.fit, set, labels, progress)?;
-    let saliency = saliency(&params.saliency, set, &fit.body)?;
-    let simplified = match stage3 {
-        Stage3::Multipose => {
-            // `multipose` as `desal eval` runs it: no saliency weights on the cost.
-            let config = desal_simplify::SimplifyConfig { saliency: false, ..config };
-            simplify::compute_multipose(&config, set, &saliency.body.weights, labels)?
-        }
-        Stage3::Template => simplify::run(
-            &params.simplify,
-            &params.saliency,
-            set,
-            labels,
-            &saliency.body.weights,
-            seams,
-            progress,
-        )?,
-    };
-    let map = map::compute(&simplified.body, set, labels)?;
-    Ok(Simplification { fit, saliency, simplified, map })
+    let input = ChainInput { set: &|| Ok(set), labels: &|| Ok(labels), hashes: None, seams };
+    let Chain { fit, saliency, simplified, map } = chain(&mut Memory, params.chain(), &input, progress)?;
+    Ok(Simplification {
+        fit: fit.into_output()?,
+        saliency: saliency.into_output()?,
+        simplified: simplified.into_output()?,
+        map: map.into_output()?,
+    })
 }
 
 /// A skinned glTF rig simplified as `desal run` simplifies a `[dataset.rig]`: the bytes of
@@ -205,7 +186,6 @@ pub fn simplify_rig(
     file: &Path,
     rig: &RigParams,
     params: &StageParams,
-    stage3: Stage3,
     progress: &dyn Progress,
 ) -> Result<RigSimplification> {
     rig.weight_options()?;
@@ -214,13 +194,12 @@ pub fn simplify_rig(
     let set = ingest.body.to_pose_set().with_context(|| format!("{}", file.display()))?;
     let labels = input.compute_labels(&set)?;
     let part_labels = labels.body.to_labels().with_context(|| format!("{}", file.display()))?;
-    let seams = if params.simplify.keeps_seams() && stage3 != Stage3::Multipose {
+    let seams = if params.simplify.keeps_seams() {
         Some(crate::stages::seams::rig_seam_edges(&input, set.vertex_count())?)
     } else {
         None
     };
-    let seam_edges = seams.as_ref().map(|s| s.edges.as_slice());
-    let stages = simplify_with_seams(params, &set, &part_labels, stage3, seam_edges, progress)?;
+    let stages = simplify_with_seams(params, &set, &part_labels, seams.as_ref(), progress)?;
     let (glb, summary) =
         crate::stages::rig::simplified_glb(&input.to_owned(), &stages.simplified.body, &stages.map.body)?;
     Ok(RigSimplification { glb, rig: summary, ingest, labels, stages })
@@ -232,7 +211,8 @@ pub fn apply_map(map: &MapV1, set: &PoseSet, labels: &PartLabels) -> Result<(Pos
 }
 
 /// A hierarchy of `set` (level 0) and its coarse levels, as `desal run` writes it to
-/// `hierarchy.npz`, with each level step's summary.
+/// `hierarchy.npz`, with each level step's summary: the one level loop
+/// (`stages::hierarchy::levels`), in memory.
 pub fn hierarchy(
     params: &StageParams,
     hierarchy: &HierarchyParams,
@@ -241,16 +221,10 @@ pub fn hierarchy(
     progress: &dyn Progress,
 ) -> Result<(HierarchyArrays, Vec<LevelSummary>)> {
     hierarchy.check_levels(Some(set.vertex_count()))?;
-    let settings =
-        LevelSettings { fit: &params.fit, saliency: &params.saliency, simplify: &params.simplify, hierarchy };
-    let mut levels: Vec<HierarchyLevelV1> = Vec::new();
-    let mut summaries = Vec::new();
-    for _ in 0..hierarchy.levels.len() {
-        let parents: Vec<&HierarchyLevelV1> = levels.iter().collect();
-        let out = hierarchy::compute_level(&settings, set, labels, &parents, progress)?;
-        levels.push(out.body);
-        summaries.push(out.summary);
-    }
-    let bodies: Vec<&HierarchyLevelV1> = levels.iter().collect();
-    Ok((hierarchy::npz_arrays(set.vertex_count(), &set.faces, &bodies)?, summaries))
+    let settings = LevelSettings { chain: params.chain(), hierarchy };
+    let input = ChainInput { set: &|| Ok(set), labels: &|| Ok(labels), hashes: None, seams: None };
+    let levels = hierarchy::levels(&mut Memory, &settings, &input, progress)?;
+    let bodies = levels.iter().map(|l| l.body()).collect::<Result<Vec<_>>>()?;
+    let arrays = hierarchy::npz_arrays(set.vertex_count(), &set.faces, &bodies)?;
+    Ok((arrays, levels.into_iter().map(|l| l.summary).collect()))
 }

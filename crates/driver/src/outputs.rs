@@ -25,8 +25,8 @@ use desal_mesh::{PartLabels, PoseSet, TriMesh};
 use serde::Serialize;
 
 use crate::cache::canonical_json;
-use crate::stages::DatasetStages;
-use crate::stages::runner::StageRecord;
+use crate::stages::runner::{StageRecord, Staged};
+use crate::stages::{Counts, DatasetStages};
 
 /// What the output writers write: part of [`outputs_key`], so that a folder written by
 /// an older desal is rewritten, not kept as in place. Bump it whenever a writer here
@@ -86,6 +86,51 @@ impl DatasetOutputs {
     }
 }
 
+/// `report.json` of one dataset.
+#[derive(Debug, Clone, Serialize)]
+pub struct DatasetReport {
+    pub dataset: String,
+    pub pipeline: String,
+    pub input: Counts,
+    pub output: Counts,
+    pub stages: Vec<StageRecord>,
+    pub seconds: f64,
+    pub out_dir: PathBuf,
+    /// Identity of the output folder's content (see `outputs_key`).
+    pub outputs_key: String,
+    /// Every file the output folder holds besides report.json.
+    pub files: Vec<String>,
+}
+
+/// Fills the output folder of `report`'s dataset from its `stages` and writes
+/// `report.json`: a warm run (every stage cached, not `force`d) whose outputs are already
+/// in place only refreshes `report.json`; otherwise the folder is built whole and swapped
+/// in ([`write_outputs`]). Sets the report's `outputs_key`, `files` and `seconds`.
+pub fn publish(
+    report: &mut DatasetReport,
+    stages: &DatasetStages,
+    up_axis: Option<&str>,
+    force: bool,
+    start: std::time::Instant,
+) -> Result<()> {
+    report.outputs_key = outputs_key(&report.stages, up_axis);
+    // When a stage ran (a corrupt entry recomputed, say), the folder is rewritten
+    // regardless.
+    if !force
+        && report.stages.iter().all(|s| s.cached)
+        && let Some(files) = outputs_in_place(&report.out_dir, &report.outputs_key)
+    {
+        report.files = files;
+        report.seconds = start.elapsed().as_secs_f64();
+        desal_io::write_json(&report.out_dir.join("report.json"), report)?;
+        return Ok(());
+    }
+    let outputs = dataset_outputs(stages, up_axis)?;
+    report.files = outputs.names();
+    report.seconds = start.elapsed().as_secs_f64();
+    write_outputs(&report.out_dir, outputs, report)
+}
+
 /// Everything the dataset's output folder holds (decodes the bodies it needs).
 pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<DatasetOutputs> {
     let set = stages.pose_set()?;
@@ -105,15 +150,15 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
         Box::new(move |p| Ok(desal_io::ply::write_ply(p, &raw, &desal_io::ply::PlyWriteOptions::default())?)),
     ));
     outputs.files.extend(simplified_pose_set("simplified/", map, simple_set, simple_labels));
-    add_artifact(&mut outputs, "poses", &stages.poses.artifact_path, &stages.poses.summary);
-    add_artifact(&mut outputs, "labels", &stages.labels.artifact_path, &stages.labels.summary);
+    add_artifact(&mut outputs, "poses", &stages.poses)?;
+    add_artifact(&mut outputs, "labels", &stages.labels)?;
     if let Some(parts) = &stages.parts {
         add_parts_files(&mut outputs, set.template_mesh(), part_labels, parts, up_axis)?;
     }
-    add_artifact(&mut outputs, "fit", &stages.fit.artifact_path, &stages.fit.summary);
-    add_artifact(&mut outputs, "saliency", &stages.saliency.artifact_path, &stages.saliency.summary);
-    add_artifact(&mut outputs, "simplified", &stages.simplified.artifact_path, &stages.simplified.summary);
-    add_artifact(&mut outputs, "map", &stages.map.artifact_path, &stages.map.summary);
+    add_artifact(&mut outputs, "fit", &stages.fit)?;
+    add_artifact(&mut outputs, "saliency", &stages.saliency)?;
+    add_artifact(&mut outputs, "simplified", &stages.simplified)?;
+    add_artifact(&mut outputs, "map", &stages.map)?;
     if !stages.hierarchy.is_empty() {
         add_hierarchy(&mut outputs, stages, set, part_labels, up_axis)?;
     }
@@ -151,7 +196,7 @@ fn add_hierarchy(
     let report = HierarchyReport::new(arrays.levels.clone(), &bodies[0].upsampler, summaries.iter().copied());
     let report = serde_json::to_value(&report)?;
     for (k, level) in stages.hierarchy.iter().enumerate() {
-        outputs.artifacts.push((format!("hierarchy-{}.dsa", k + 1), level.artifact_path.clone()));
+        outputs.artifacts.push((format!("hierarchy-{}.dsa", k + 1), level.artifact_path()?.to_owned()));
     }
     let up = crate::pictures::parse_up_axis(up_axis)?;
     let template = set.template_mesh();
@@ -225,10 +270,15 @@ fn add_parts_files(
 }
 
 /// Puts `<name>.dsa` (the cached artifact) and `<name>.json` (its summary) in the outputs.
-fn add_artifact(outputs: &mut DatasetOutputs, name: &str, artifact: &Path, summary: &impl Serialize) {
-    outputs.artifacts.push((format!("{name}.dsa"), artifact.to_owned()));
-    let summary = serde_json::to_value(summary).expect("summaries serialise");
+fn add_artifact<T, S: Serialize>(
+    outputs: &mut DatasetOutputs,
+    name: &str,
+    stage: &Staged<T, S>,
+) -> Result<()> {
+    outputs.artifacts.push((format!("{name}.dsa"), stage.artifact_path()?.to_owned()));
+    let summary = serde_json::to_value(&stage.summary)?;
     outputs.files.push((format!("{name}.json"), Box::new(move |p| Ok(desal_io::write_json(p, &summary)?))));
+    Ok(())
 }
 
 /// The registered simplified pose set, the one writer of it: `<poses_dir><pose>.ply` for

@@ -7,14 +7,14 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use rayon::prelude::*;
-use serde::Serialize;
 
 use crate::cache::Cache;
-use crate::outputs::{check_output_folder, dataset_outputs, outputs_in_place, outputs_key, write_outputs};
+pub use crate::outputs::DatasetReport;
+use crate::outputs::{check_output_folder, publish};
 use crate::pipeline::{Dataset, Pipeline};
 use crate::progress::{Console, Lines};
-use crate::stages::runner::{RunnerOptions, Stage, StageRecord, StageRunner};
-use crate::stages::{Counts, DatasetStages};
+use crate::stages::DatasetStages;
+use crate::stages::runner::{RunnerOptions, Stage, StageRunner};
 
 /// Options of one `desal run`.
 #[derive(Debug, Clone)]
@@ -78,22 +78,6 @@ impl Shard {
     pub fn select(&self, total: usize) -> Vec<usize> {
         (0..total).filter(|k| k % self.count == self.index).collect()
     }
-}
-
-/// `report.json` of one dataset.
-#[derive(Debug, Clone, Serialize)]
-pub struct DatasetReport {
-    pub dataset: String,
-    pub pipeline: String,
-    pub input: Counts,
-    pub output: Counts,
-    pub stages: Vec<StageRecord>,
-    pub seconds: f64,
-    pub out_dir: PathBuf,
-    /// Identity of the output folder's content (see `outputs_key`).
-    pub outputs_key: String,
-    /// Every file the output folder holds besides report.json.
-    pub files: Vec<String>,
 }
 
 /// Runs a pipeline; returns one report per dataset run (in file order).
@@ -173,10 +157,7 @@ fn run_dataset(
         records: Vec::new(),
     };
     let stages = crate::stages::run_stages(&dataset.inputs(), &mut runner, &*progress)?;
-    let out_dir = dataset.out_dir.clone();
     let (input, output) = stages.counts();
-    let up_axis = dataset.spec.up_axis.as_deref();
-    let outputs_key = outputs_key(&runner.records, up_axis);
     let mut report = DatasetReport {
         dataset: dataset.spec.name.clone(),
         pipeline: pipeline.path.display().to_string(),
@@ -184,25 +165,11 @@ fn run_dataset(
         output,
         stages: runner.records,
         seconds: 0.0,
-        out_dir: out_dir.clone(),
-        outputs_key: outputs_key.clone(),
+        out_dir: dataset.out_dir.clone(),
+        outputs_key: String::new(),
         files: Vec::new(),
     };
-    // A warm run whose outputs are already in place only refreshes report.json. When a
-    // stage ran (a corrupt entry recomputed, say), the folder is rewritten regardless.
-    if !options.force
-        && report.stages.iter().all(|s| s.cached)
-        && let Some(files) = outputs_in_place(&out_dir, &outputs_key)
-    {
-        report.files = files;
-        report.seconds = start.elapsed().as_secs_f64();
-        desal_io::write_json(&out_dir.join("report.json"), &report)?;
-        return Ok(DatasetRun { dataset: 0, report, stages });
-    }
-    let outputs = dataset_outputs(&stages, up_axis)?;
-    report.files = outputs.names();
-    report.seconds = start.elapsed().as_secs_f64();
-    write_outputs(&out_dir, outputs, &report)?;
+    publish(&mut report, &stages, dataset.spec.up_axis.as_deref(), options.force, start)?;
     Ok(DatasetRun { dataset: 0, report, stages })
 }
 

@@ -33,7 +33,7 @@ pub const VERSION: u32 = 1;
 
 /// The floor's cache key for `model` (named `name`) with `folds` folds on a dataset's
 /// pose set and labels.
-pub fn key(name: &str, model: &PoseModel, folds: usize, stages: &DatasetStages) -> StageKey {
+pub fn key(name: &str, model: &PoseModel, folds: usize, stages: &DatasetStages) -> Result<StageKey> {
     #[derive(serde::Serialize)]
     struct Parameters<'a> {
         model: &'a str,
@@ -45,7 +45,7 @@ pub fn key(name: &str, model: &PoseModel, folds: usize, stages: &DatasetStages) 
         eval_source: &'static str,
         fit_version: u32,
     }
-    StageKey {
+    Ok(StageKey {
         stage: STAGE.into(),
         stage_version: VERSION,
         format_version: ArtifactKind::Floor.current_version(),
@@ -55,8 +55,8 @@ pub fn key(name: &str, model: &PoseModel, folds: usize, stages: &DatasetStages) 
             eval_source: desal_eval::SOURCE,
             fit_version: desal_fit::VERSION,
         }),
-        inputs: vec![("pose_set".into(), stages.poses.hash), ("labels".into(), stages.labels.hash)],
-    }
+        inputs: vec![("pose_set".into(), stages.poses.hash()?), ("labels".into(), stages.labels.hash()?)],
+    })
 }
 
 /// A floor, and whether it came from the cache.

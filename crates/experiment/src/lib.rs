@@ -262,7 +262,7 @@ fn evaluate_dataset(
     let floor = if let Some(model) = floor {
         // Cached: it depends on the pose set, labels, model and folds only.
         let cache = desal_driver::cache::Cache::for_output(args.cache_dir.as_deref(), &pipeline.out_root);
-        let key = floor::key(&model_name, model, args.folds, stages);
+        let key = floor::key(&model_name, model, args.folds, stages)?;
         let measured = floor::cached(&cache, &key, &model_name, || {
             model_floor(&inputs, model, args.folds, &full_surfaces)
                 .context("the model's floor at full resolution")

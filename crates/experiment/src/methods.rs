@@ -123,10 +123,8 @@ impl Method {
             return Ok(match own {
                 simplify::Method::Desal => Method::Desal,
                 simplify::Method::DesalRefit => Method::DesalRefit,
+                simplify::Method::Multipose => Method::Multipose { cost: Cost::Qslim, normalized: false },
             });
-        }
-        if text == "multipose" {
-            return Ok(Method::Multipose { cost: Cost::Qslim, normalized: false });
         }
         if text == "multipose-normalized" {
             return Ok(Method::Multipose { cost: Cost::Qslim, normalized: true });

@@ -15,7 +15,7 @@ mod convert;
 mod errors;
 mod progress;
 
-use desal_driver::memory::{self, Stage3, StageParams};
+use desal_driver::memory::{self, StageParams};
 use desal_driver::stages::fit::FitParams;
 use desal_driver::stages::hierarchy::HierarchyParams;
 use desal_driver::stages::parts::PartsParams;
@@ -506,40 +506,42 @@ fn pose_array<'py>(py: Python<'py>, set: &PoseSet) -> Bound<'py, PyAny> {
     convert::array(py, flat, [set.pose_count(), set.vertex_count(), 3]).into_any()
 }
 
-/// The stage parameters of `simplify_pose_set` and `hierarchy`: the pipeline file's
-/// `[dataset.fit]`, `[dataset.saliency]` and `[dataset.simplify]`, and a method name
+/// The stage parameters of `simplify_pose_set`, `simplify_rig` and `hierarchy`: the
+/// pipeline file's `[dataset.fit]`, `[dataset.saliency]` and `[dataset.simplify]`, and a
+/// method name: one of stage 3's methods (`[simplify] method`, which set their own
+/// settings; `multipose` with the plain quadric cost, as `desal eval` names it), or a cost
 /// that sets the cost's switches.
 fn stage_params(
     method: &str,
     fit: Option<&str>,
     saliency: Option<&str>,
     simplify: Option<&str>,
-) -> PyResult<(StageParams, Stage3)> {
+) -> PyResult<StageParams> {
     let mut p = StageParams {
         fit: table_as("fit", fit, FIT_METHOD)?,
         saliency: table("saliency", saliency)?,
         simplify: table("simplify", simplify)?,
     };
-    let stage3 = if method == "multipose" { Stage3::Multipose } else { Stage3::Template };
-    // desal's own methods (docs/eval/desal-method.md), as `[simplify] method` names
-    // them: they set the cost's settings themselves.
-    let own = method.parse::<Method>().ok();
-    if own.is_some() {
-        p.simplify.method = own;
-    } else if stage3 == Stage3::Template {
-        let cost: Cost = method.parse().map_err(|e| {
+    let cost = match method.parse::<Method>() {
+        Ok(own) => {
+            p.simplify.method = Some(own);
+            (own == Method::Multipose).then_some(Cost::Qslim)
+        }
+        Err(_) => Some(method.parse::<Cost>().map_err(|e| {
             bad(
                 "method",
                 format!(
                     "{e}: use \"paper\", \"qslim\", \"saliency\", \"balance\", \"multipose\", \"desal\" or \"desal-refit\""
                 ),
             )
-        })?;
+        })?),
+    };
+    if let Some(cost) = cost {
         (p.simplify.saliency, p.simplify.balance) = cost.switches();
     }
     p.simplify.config().map_err(errors::input)?;
     p.saliency.config().map_err(errors::input)?;
-    Ok((p, stage3))
+    Ok(p)
 }
 
 /// The whole pipeline on one pose set: stages 1–4 as `desal run` computes them.
@@ -556,10 +558,9 @@ fn simplify_pose_set<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     guard("simplify_pose_set", || {
         let ps = args::instance::<PyPoseSet>("ps", ps)?.get();
-        let (params, stage3) = stage_params(method, fit, saliency, simplify)?;
+        let params = stage_params(method, fit, saliency, simplify)?;
         let (s, poses, labels) = detached(py, progress, |p| {
-            let s = memory::simplify_pose_set(&params, &ps.set, &ps.labels, stage3, p)
-                .map_err(errors::classify)?;
+            let s = memory::simplify_pose_set(&params, &ps.set, &ps.labels, p).map_err(errors::classify)?;
             let (poses, labels) =
                 memory::apply_map(&s.map.body, &ps.set, &ps.labels).map_err(errors::classify)?;
             Ok((s, poses, labels))
@@ -624,11 +625,11 @@ fn simplify_rig<'py>(
         rig.frame_config().map_err(errors::input)?;
         rig.parts_config().map_err(errors::input)?;
         rig.weight_options().map_err(errors::input)?;
-        let (params, stage3) = stage_params(method, fit, saliency, simplify)?;
+        let params = stage_params(method, fit, saliency, simplify)?;
         // Refused now, not after the simplification: an output that is a folder or a FIFO.
         desal_io::confine::write_target(&out).map_err(errors::io)?;
         let s = detached(py, progress, |p| {
-            let s = memory::simplify_rig(&file, &rig, &params, stage3, p).map_err(errors::classify)?;
+            let s = memory::simplify_rig(&file, &rig, &params, p).map_err(errors::classify)?;
             desal_io::write_atomic(&out, &s.glb).map_err(errors::io)?;
             Ok(s)
         })?;
@@ -672,13 +673,7 @@ fn hierarchy<'py>(
 ) -> PyResult<(Bound<'py, PyDict>, Bound<'py, PyAny>)> {
     guard("hierarchy", || {
         let ps = args::instance::<PyPoseSet>("ps", ps)?.get();
-        let (stage, stage3) = stage_params(method, fit, saliency, simplify)?;
-        if stage3 != Stage3::Template {
-            return Err(bad(
-                "method",
-                "a hierarchy's levels are simplified by a cost (paper, qslim, saliency, balance) or by desal or desal-refit",
-            ));
-        }
+        let stage = stage_params(method, fit, saliency, simplify)?;
         let h: HierarchyParams = table("hierarchy", Some(hierarchy))?;
         h.config().map_err(errors::input)?;
         h.check_levels(Some(ps.set.vertex_count())).map_err(errors::input)?;

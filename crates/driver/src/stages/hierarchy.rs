@@ -26,8 +26,8 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use crate::cache::{StageKey, canonical_json};
-use crate::stages::fit::FitParams;
-use crate::stages::runner::StageOutput;
+use crate::stages::chain::{ChainInput, ChainSettings, chain};
+use crate::stages::runner::{Memory, Stage, StageOutput, Staged, Store};
 use crate::stages::saliency::SaliencyParams;
 use crate::stages::simplify::SimplifyParams;
 
@@ -133,9 +133,8 @@ impl HierarchyParams {
 /// The dataset's settings a level is simplified with.
 #[derive(Debug, Clone, Copy)]
 pub struct LevelSettings<'a> {
-    pub fit: &'a FitParams,
-    pub saliency: &'a SaliencyParams,
-    pub simplify: &'a SimplifyParams,
+    /// Stages 1–3, as for level 0.
+    pub chain: ChainSettings<'a>,
     pub hierarchy: &'a HierarchyParams,
 }
 
@@ -148,7 +147,7 @@ impl LevelSettings<'_> {
             target_faces: None,
             ratio: None,
             placement: Placement::Subset,
-            ..self.simplify.clone()
+            ..self.chain.simplify.clone()
         }
     }
 
@@ -163,8 +162,8 @@ impl LevelSettings<'_> {
         parent: Option<ContentHash>,
     ) -> Result<StageKey> {
         let simplify = self.simplify_params(step).key(poses, poses, labels)?;
-        let fit = self.fit.key(poses, labels);
-        let saliency = self.saliency.key(poses, poses)?;
+        let fit = self.chain.fit.key(poses, labels);
+        let saliency = self.chain.saliency.key(poses, poses)?;
         let mut inputs = vec![("poses".to_owned(), poses), ("labels".to_owned(), labels)];
         if let Some(parent) = parent {
             inputs.push(("parent".into(), parent));
@@ -282,6 +281,25 @@ pub struct LevelSummary {
     pub heldout_mse_ratio: f64,
 }
 
+impl LevelSummary {
+    /// The level's line in the run's table and on `desal hierarchy`'s stderr.
+    pub fn note(&self) -> String {
+        format!(
+            "level {}: {} -> {} vertices, {} U ({} nnz), held-out MSE fitted {:.3e} / barycentric {:.3e} m² = {:.3}, {:.2} s (+ {:.2} s held out)",
+            self.level,
+            self.fine_vertices,
+            self.vertices,
+            self.upsampler,
+            self.up_nnz,
+            self.heldout_fitted.mse,
+            self.heldout_barycentric.mse,
+            self.heldout_mse_ratio,
+            self.seconds,
+            self.heldout_seconds
+        )
+    }
+}
+
 /// Level `parents.len()`'s registered pose set and labels, gathered from level 0 at its
 /// `coarse_to_orig` (level 0 itself when `parents` is empty).
 fn level_pose_set(
@@ -311,6 +329,36 @@ fn upsampler_matrix(level: &HierarchyLevelV1) -> Result<CsrMatrix> {
     Ok(CsrMatrix::from_rows(level.coarse_to_fine.len(), rows)?)
 }
 
+/// Every coarse level of `settings.hierarchy`, level 1 first, each one stage of `store`
+/// simplified from the level above (the level loop of `desal run`, `desal hierarchy`
+/// and the Python package). `input` is level 0's pose set and labels (its seams are not
+/// used: a level is simplified without them).
+pub fn levels(
+    store: &mut impl Store,
+    settings: &LevelSettings,
+    input: &ChainInput,
+    progress: &dyn Progress,
+) -> Result<Vec<Staged<HierarchyLevelV1, LevelSummary>>> {
+    let mut levels: Vec<Staged<HierarchyLevelV1, LevelSummary>> = Vec::new();
+    for step in 0..settings.hierarchy.levels.len() {
+        let level = store.stage(
+            Stage::Hierarchy,
+            || {
+                let (poses, labels) = input.hashes()?;
+                let parent = levels.last().map(|l| l.hash()).transpose()?;
+                settings.key(step, poses, labels, parent)
+            },
+            &[],
+            || {
+                let parents = levels.iter().map(|l| l.body()).collect::<Result<Vec<_>>>()?;
+                compute_level(settings, (input.set)()?, (input.labels)()?, &parents, progress)
+            },
+        )?;
+        levels.push(level);
+    }
+    Ok(levels)
+}
+
 /// Computes level step `parents.len()` (→ level `parents.len() + 1`); `parents` are the
 /// artifacts of levels 1..=k, in order.
 pub fn compute_level(
@@ -327,22 +375,15 @@ pub fn compute_level(
     let parent = parents.last().copied();
     let (fine, fine_labels) = level_pose_set(full, labels, parent)?;
 
-    // Stages 1–4 on this level's pose set, through the one stage-3/4 path.
-    let config = settings.simplify_params(step).config()?;
-    let weights = if config.saliency {
-        let fit = super::fit::compute(settings.fit, &fine, &fine_labels, progress)?.body;
-        super::saliency::compute(settings.saliency, &fit, fine.template_mesh().diagonal())?.body.weights
-    } else {
-        Vec::new()
-    };
+    // Stages 1–4 on this level's pose set, as on level 0, in memory: the level is one
+    // cached stage.
     let params = settings.simplify_params(step);
-    let simplified =
-        super::simplify::run(&params, settings.saliency, &fine, &fine_labels, &weights, None, progress)?.body;
-    let mapped = super::map::map(&simplified, &fine, &fine_labels)?;
-    let coarse_to_fine = mapped.map.simp_to_orig;
-    let faces = simplified.faces;
+    let input = ChainInput { set: &|| Ok(&fine), labels: &|| Ok(&fine_labels), hashes: None, seams: None };
+    let stages = chain(&mut Memory, ChainSettings { simplify: &params, ..settings.chain }, &input, progress)?;
+    let coarse_to_fine = stages.map.body()?.simp_to_orig.clone();
+    let faces = stages.simplified.body()?.faces.clone();
 
-    let mask = training_mask(&fine, settings.saliency);
+    let mask = training_mask(&fine, settings.chain.saliency);
     let input =
         LevelInput { fine: &fine, coarse_to_fine: &coarse_to_fine, coarse_faces: &faces, training: &mask };
     let level = build_level(&input, &upsampler)?;
@@ -363,13 +404,13 @@ pub fn compute_level(
     };
     let seconds = start.elapsed().as_secs_f64();
 
-    let mut chain: Vec<&HierarchyLevelV1> = parents.to_vec();
-    chain.push(&body);
+    let mut levels: Vec<&HierarchyLevelV1> = parents.to_vec();
+    levels.push(&body);
     let fitted = measured_fitted(Some(settings.hierarchy))?;
     let heldout_start = std::time::Instant::now();
     let v2f = if settings.hierarchy.heldout_v2f { V2f::Measure } else { V2f::Skip };
     let [heldout_fitted, heldout_barycentric] =
-        heldout(full, &chain, [&fitted, &Upsampler::Barycentric], settings.saliency, v2f)?;
+        heldout(full, &levels, [&fitted, &Upsampler::Barycentric], settings.chain.saliency, v2f)?;
     let r = &level.report;
     let summary = LevelSummary {
         level: step + 1,
@@ -390,19 +431,7 @@ pub fn compute_level(
         heldout_fitted,
         heldout_barycentric,
     };
-    let note = format!(
-        "level {}: {} -> {} vertices, {} U ({} nnz), held-out MSE fitted {:.3e} / barycentric {:.3e} m² = {:.3}, {:.2} s (+ {:.2} s held out)",
-        summary.level,
-        summary.fine_vertices,
-        summary.vertices,
-        summary.upsampler,
-        summary.up_nnz,
-        summary.heldout_fitted.mse,
-        summary.heldout_barycentric.mse,
-        summary.heldout_mse_ratio,
-        seconds,
-        summary.heldout_seconds
-    );
+    let note = summary.note();
     Ok(StageOutput { body, summary, note })
 }
 
@@ -562,6 +591,7 @@ pub fn describe(l: &HierarchyLevelV1, out: &mut String) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::stages::fit::FitParams;
 
     fn params(levels: Vec<usize>) -> HierarchyParams {
         HierarchyParams {
@@ -595,7 +625,8 @@ mod tests {
         let (fit, sal, simp) = (FitParams::default(), SaliencyParams::default(), SimplifyParams::default());
         let h = ContentHash::of(b"poses");
         let full_key = |hp: &HierarchyParams| {
-            let settings = LevelSettings { fit: &fit, saliency: &sal, simplify: &simp, hierarchy: hp };
+            let chain = ChainSettings { fit: &fit, saliency: &sal, simplify: &simp };
+            let settings = LevelSettings { chain, hierarchy: hp };
             settings.key(0, h, h, None).unwrap()
         };
         let key = |hp: &HierarchyParams| full_key(hp).hash();

@@ -6,6 +6,7 @@
 //! Dependency order of the driver: `cache` ← `stages` ← `outputs` ← `pipeline` ←
 //! `run` ← `commands`; no module imports a later one.
 
+pub mod chain;
 pub mod fit;
 pub mod hierarchy;
 pub mod ingest;
@@ -26,12 +27,13 @@ use desal_io::artifact::{
 };
 use desal_mesh::{PartLabels, PoseSet, Progress};
 
+use chain::{Chain, ChainInput, ChainSettings, chain};
 use fit::{FitParams, FitSummary};
 use hierarchy::{HierarchyParams, LevelSummary};
 use ingest::{IngestParams, IngestSummary, LabelsSummary};
 use map::MapSummary;
 use parts::{PartsParams, PartsSummary};
-use runner::{Stage, StageRunner, Staged};
+use runner::{Stage, StageRunner, Staged, Store};
 use saliency::{SaliencyParams, SaliencySummary};
 use simplify::{SimplifyParams, SimplifySummary};
 
@@ -116,12 +118,17 @@ pub fn run_stages(
 ) -> Result<DatasetStages> {
     // Ingest: keyed on the bytes of every pose file (or of the rig), never on their paths.
     let poses = match &inputs.rig {
-        Some(rig) => runner.stage(Stage::Ingest, rig.ingest_key()?, &rig.hints(), || rig.compute_poses())?,
+        Some(rig) => {
+            runner.stage(Stage::Ingest, || rig.ingest_key(), &rig.hints(), || rig.compute_poses())?
+        }
         None => {
             let (key, template) = inputs.ingest.key()?;
-            runner.stage(Stage::Ingest, key, &inputs.ingest.hints(), || {
-                inputs.ingest.compute(template, progress)
-            })?
+            runner.stage(
+                Stage::Ingest,
+                || Ok(key),
+                &inputs.ingest.hints(),
+                || inputs.ingest.compute(template, progress),
+            )?
         }
     };
     // Decoded once, and only if a later stage has to run.
@@ -132,16 +139,16 @@ pub fn run_stages(
     // discovered from the poses and keyed on their parameters and the poses' hash.
     let (labels, parts_summary) = match (&inputs.rig, inputs.labels) {
         (Some(rig), LabelsInput::Rig) => {
-            let key = rig.labels_key(poses.hash)?;
+            let key = || rig.labels_key(poses.hash()?);
             (runner.stage(Stage::Ingest, key, &rig.hints(), || rig.compute_labels(set()?))?, None)
         }
         (None, LabelsInput::File(file)) => {
-            let key = ingest::labels_key(file, poses.hash)?;
+            let key = || ingest::labels_key(file, poses.hash()?);
             let hints = vec![("labels_file".to_owned(), ingest::file_name(file))];
             (runner.stage(Stage::Ingest, key, &hints, || ingest::compute_labels(file, set()?))?, None)
         }
         (None, LabelsInput::Auto(params)) => {
-            let key = params.key(poses.hash)?;
+            let key = || params.key(poses.hash()?);
             let found = runner.stage(Stage::Parts, key, &[], || parts::compute(params, set()?))?;
             let summary = found.summary.clone();
             (found.map_summary(|s| s.labels_summary()), Some(summary))
@@ -154,78 +161,43 @@ pub fn run_stages(
     let part_labels =
         || -> Result<&PartLabels> { get_or_try_init(&labels_cell, || Ok(labels.body()?.to_labels()?)) };
 
-    // Stage 1: per-part rigid fit of the template onto every pose.
-    let key = inputs.fit.key(poses.hash, labels.hash);
-    let fitted =
-        runner.stage(Stage::Fit, key, &[], || fit::compute(inputs.fit, set()?, part_labels()?, progress))?;
-
-    // Stage 2: deformation saliency from the residuals.
-    let key = inputs.saliency.key(poses.hash, fitted.hash)?;
-    let salient = runner.stage(Stage::Saliency, key, &[], || {
-        saliency::compute(inputs.saliency, fitted.body()?, set()?.template_mesh().diagonal())
-    })?;
-
-    // Stage 3: saliency-weighted quadric simplification of the template, keeping a rig's
-    // attribute seams as polylines unless told to ignore them (keyed by their content).
+    // Stages 1–4, written once (`chain.rs`); stage 3 keeps a rig's attribute seams as
+    // polylines unless told to ignore them.
     let seam_edges = match &inputs.rig {
         Some(rig) if inputs.simplify.keeps_seams() => {
             Some(seams::rig_seam_edges(rig, poses.summary.vertices)?)
         }
         _ => None,
     };
-    let key = inputs.simplify.key_with_seams(
-        poses.hash,
-        salient.hash,
-        labels.hash,
-        seam_edges.as_ref().map(|s| s.hash),
-    )?;
-    let simplified = runner.stage(Stage::Simplify, key, &[], || {
-        simplify::run(
-            inputs.simplify,
-            inputs.saliency,
-            set()?,
-            part_labels()?,
-            &salient.body()?.weights,
-            seam_edges.as_ref().map(|s| s.edges.as_slice()),
-            progress,
-        )
-    })?;
-
-    // Stage 4: map the simplified vertices to original ones.
-    let key = map::key(poses.hash, simplified.hash);
-    let mapped =
-        runner.stage(Stage::Map, key, &[], || map::compute(simplified.body()?, set()?, part_labels()?))?;
+    let input = ChainInput {
+        set: &set,
+        labels: &part_labels,
+        hashes: Some((poses.hash()?, labels.hash()?)),
+        seams: seam_edges.as_ref(),
+    };
+    let settings = ChainSettings { fit: inputs.fit, saliency: inputs.saliency, simplify: inputs.simplify };
+    let Chain { fit, saliency, simplified, map } = chain(runner, settings, &input, progress)?;
 
     // Hierarchy: one stage per coarse level, each from the level above.
-    let mut levels: Vec<Staged<HierarchyLevelV1, LevelSummary>> = Vec::new();
-    if let Some(h) = inputs.hierarchy {
-        h.check_levels(Some(poses.summary.vertices))?;
-        let settings = hierarchy::LevelSettings {
-            fit: inputs.fit,
-            saliency: inputs.saliency,
-            simplify: inputs.simplify,
-            hierarchy: h,
-        };
-        for step in 0..h.levels.len() {
-            let key = settings.key(step, poses.hash, labels.hash, levels.last().map(|l| l.hash))?;
-            let level = runner.stage(Stage::Hierarchy, key, &[], || {
-                let parents = levels.iter().map(|l| l.body()).collect::<Result<Vec<_>>>()?;
-                hierarchy::compute_level(&settings, set()?, part_labels()?, &parents, progress)
-            })?;
-            levels.push(level);
+    let hierarchy = match inputs.hierarchy {
+        Some(h) => {
+            h.check_levels(Some(poses.summary.vertices))?;
+            let settings = hierarchy::LevelSettings { chain: settings, hierarchy: h };
+            hierarchy::levels(runner, &settings, &input, progress)?
         }
-    }
+        None => Vec::new(),
+    };
 
     Ok(DatasetStages {
-        hierarchy: levels,
+        hierarchy,
         rig: inputs.rig.map(|r| r.to_owned()),
         poses,
         labels,
         parts: parts_summary,
-        fit: fitted,
-        saliency: salient,
+        fit,
+        saliency,
         simplified,
-        map: mapped,
+        map,
         pose_set: set_cell,
         part_labels: labels_cell,
     })

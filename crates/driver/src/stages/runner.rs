@@ -1,18 +1,22 @@
-//! The stage runner: one stage run against the cache. A hit yields the entry's typed
-//! summary and a lazily decoded body; a miss (or `--force`/`--from`) computes the
-//! stage, stores it and records why it missed. Every stage of `desal run` goes through
-//! [`StageRunner::stage`], so the cache rules are written once.
+//! Where a stage's output comes from: a [`Store`]. The stage chain (`chain.rs`) and the
+//! hierarchy's level loop are written once over it, and run on one of two stores:
+//!
+//! - [`StageRunner`], the content-addressed cache (`desal run`): a hit yields the entry's
+//!   typed summary and a lazily decoded body; a miss (or `--force`/`--from`) computes the
+//!   stage, stores it and records why it missed, so the cache rules are written once;
+//! - [`Memory`], which computes every stage and keeps nothing (the Python package, the
+//!   single-stage commands, and the stages inside one hierarchy level).
 
 use std::cell::OnceCell;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Result, anyhow};
 use desal_io::artifact::{ArtifactBody, ContentHash};
+use serde::Serialize;
 use serde::de::DeserializeOwned;
-use serde::{Deserialize, Serialize};
 
-use crate::cache::{Cache, StageKey};
+use crate::cache::{Cache, StageKey, StoredSummary};
 use crate::progress::Console;
 
 /// The stages in run order. `--from` names one of them.
@@ -77,14 +81,6 @@ pub struct StageOutput<T, S> {
     pub note: String,
 }
 
-/// A summary as the cache stores it in `summary.json`: the stage's fields plus the note.
-#[derive(Debug, Serialize, Deserialize)]
-pub struct StoredSummary<S> {
-    #[serde(flatten)]
-    pub summary: S,
-    pub note: String,
-}
-
 /// One stage's line in `report.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct StageRecord {
@@ -99,28 +95,45 @@ pub struct StageRecord {
     pub note: String,
 }
 
-/// A stage's output: where its artifact is, its content hash and summary, and its body —
-/// decoded from the cache entry only when something asks for it, so a warm run that
-/// needs nothing recomputed decodes nothing.
+/// A stage's output: its summary and note, its body, and — from the cache — its content
+/// hash and artifact file. A cached body is decoded from the entry only when something
+/// asks for it, so a warm run that needs nothing recomputed decodes nothing.
 #[derive(Debug)]
 pub struct Staged<T, S> {
     body: OnceCell<T>,
-    pub hash: ContentHash,
+    /// The cache entry: its artifact's content hash and file. `None` in [`Memory`].
+    entry: Option<(ContentHash, PathBuf)>,
     pub summary: S,
-    /// The cache entry's artifact file (copied into the output folder).
-    pub artifact_path: PathBuf,
+    pub note: String,
 }
 
 impl<T, S> Staged<T, S> {
+    /// A stage computed in memory.
+    fn computed(out: StageOutput<T, S>) -> Self {
+        Staged { body: OnceCell::from(out.body), entry: None, summary: out.summary, note: out.note }
+    }
+
+    /// The artifact's content hash: an input of the keys of the stages after it. Only a
+    /// stage served by the cache has one, and only the cache builds keys.
+    pub fn hash(&self) -> Result<ContentHash> {
+        self.entry
+            .as_ref()
+            .map(|(hash, _)| *hash)
+            .ok_or_else(|| anyhow!("a stage computed in memory has no cache key"))
+    }
+
+    /// The cache entry's artifact file (copied into the output folder).
+    pub fn artifact_path(&self) -> Result<&Path> {
+        self.entry
+            .as_ref()
+            .map(|(_, path)| path.as_path())
+            .ok_or_else(|| anyhow!("a stage computed in memory has no artifact file"))
+    }
+
     /// The same stage output with its summary converted (the parts stage's output seen
     /// as the labels stage's).
     pub fn map_summary<S2>(self, f: impl FnOnce(S) -> S2) -> Staged<T, S2> {
-        Staged {
-            body: self.body,
-            hash: self.hash,
-            summary: f(self.summary),
-            artifact_path: self.artifact_path,
-        }
+        Staged { body: self.body, entry: self.entry, summary: f(self.summary), note: self.note }
     }
 }
 
@@ -132,8 +145,45 @@ impl<T: ArtifactBody, S> Staged<T, S> {
         }
         // A cache entry, which a shard sharing the cache may be replacing.
         let (_, body, _) =
-            crate::cache::read_entry_file(&self.artifact_path, desal_io::artifact::read_artifact::<T>)?;
+            crate::cache::read_entry_file(self.artifact_path()?, desal_io::artifact::read_artifact::<T>)?;
         Ok(self.body.get_or_init(|| body))
+    }
+
+    /// The body, summary and note, the body decoded if it was not yet.
+    pub fn into_output(self) -> Result<StageOutput<T, S>> {
+        self.body()?;
+        let body = self.body.into_inner().expect("decoded above");
+        Ok(StageOutput { body, summary: self.summary, note: self.note })
+    }
+}
+
+/// Where stages are served from: the cache ([`StageRunner`]) or memory ([`Memory`]).
+pub trait Store {
+    /// Stage `stage`'s output: the store's when it holds the output of `key`, else
+    /// `compute`d (and kept, by a store that keeps). `key` and `hints` are used only by
+    /// a store that keys its outputs.
+    fn stage<T: ArtifactBody, S: Serialize + DeserializeOwned>(
+        &mut self,
+        stage: Stage,
+        key: impl FnOnce() -> Result<StageKey>,
+        hints: &[(String, String)],
+        compute: impl FnOnce() -> Result<StageOutput<T, S>>,
+    ) -> Result<Staged<T, S>>;
+}
+
+/// The store that keeps nothing: every stage is computed, no key is built.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Memory;
+
+impl Store for Memory {
+    fn stage<T: ArtifactBody, S: Serialize + DeserializeOwned>(
+        &mut self,
+        _stage: Stage,
+        _key: impl FnOnce() -> Result<StageKey>,
+        _hints: &[(String, String)],
+        compute: impl FnOnce() -> Result<StageOutput<T, S>>,
+    ) -> Result<Staged<T, S>> {
+        Ok(Staged::computed(compute()?))
     }
 }
 
@@ -158,69 +208,42 @@ pub struct StageRunner<'a> {
     pub records: Vec<StageRecord>,
 }
 
-impl StageRunner<'_> {
-    /// Looks `key` up; on a miss (or when forced) runs `compute` and stores its result.
-    /// An entry whose summary does not parse as `S` is corrupt: it is evicted and
-    /// recomputed, like one that fails its checksum.
-    pub fn stage<T: ArtifactBody, S: Serialize + DeserializeOwned>(
+impl Store for StageRunner<'_> {
+    /// [`Cache::serve`], recorded in `report.json`'s stage list.
+    fn stage<T: ArtifactBody, S: Serialize + DeserializeOwned>(
         &mut self,
         stage: Stage,
-        key: StageKey,
+        key: impl FnOnce() -> Result<StageKey>,
         hints: &[(String, String)],
         compute: impl FnOnce() -> Result<StageOutput<T, S>>,
     ) -> Result<Staged<T, S>> {
+        let key = key()?;
         let start = Instant::now();
         let forced = self.options.force || self.options.from.is_some_and(|from| stage >= from);
-        let key_hash = key.hash();
-        let entry = self.cache.entry_dir(&key).join("artifact.dsa");
-        if !forced && let Some(hit) = self.cache.lookup::<T>(&key) {
-            match serde_json::from_slice::<StoredSummary<S>>(&hit.summary) {
-                Ok(stored) => {
-                    self.records.push(StageRecord {
-                        name: key.stage.clone(),
-                        cached: true,
-                        seconds: start.elapsed().as_secs_f64(),
-                        cache_key: key_hash.to_hex(),
-                        miss_reason: None,
-                        note: stored.note,
-                    });
-                    self.cache.record(self.dataset, &key)?;
-                    return Ok(Staged {
-                        body: OnceCell::new(),
-                        hash: hit.hash,
-                        summary: stored.summary,
-                        artifact_path: entry,
-                    });
-                }
-                Err(e) => self
-                    .cache
-                    .reject(&key, &format!("{}: {e}", entry.with_file_name("summary.json").display())),
+        let (console, explain, dataset) = (self.console, self.options.explain, self.dataset);
+        let on_miss = |reason: &str| {
+            if explain {
+                console.println(&format!("{dataset}: {} missed the cache: {reason}", key.stage));
             }
-        }
-        let reason = if forced {
-            "forced (--force or --from)".to_owned()
-        } else {
-            self.cache.explain_miss(self.dataset, &key)
         };
-        if self.options.explain {
-            self.console.println(&format!("{}: {} missed the cache: {reason}", self.dataset, key.stage));
-        }
-        let StageOutput { body, summary, note } = compute()?;
-        let stored = StoredSummary { summary, note };
-        if forced {
-            self.cache.evict(&key);
-        }
-        let producer = key.producer(hints);
-        let hash = self.cache.store(&key, &producer, &body, &stored)?;
-        self.cache.record(self.dataset, &key)?;
+        let served = self.cache.serve(dataset, &key, hints, forced, on_miss, || {
+            let StageOutput { body, summary, note } = compute()?;
+            Ok((body, StoredSummary { summary, note }))
+        })?;
         self.records.push(StageRecord {
             name: key.stage.clone(),
-            cached: false,
+            cached: served.miss_reason.is_none(),
             seconds: start.elapsed().as_secs_f64(),
-            cache_key: key_hash.to_hex(),
-            miss_reason: Some(reason),
-            note: stored.note,
+            cache_key: key.hash().to_hex(),
+            miss_reason: served.miss_reason,
+            note: served.stored.note.clone(),
         });
-        Ok(Staged { body: OnceCell::from(body), hash, summary: stored.summary, artifact_path: entry })
+        let body = served.body.map_or_else(OnceCell::new, OnceCell::from);
+        Ok(Staged {
+            body,
+            entry: Some((served.hash, served.artifact)),
+            summary: served.stored.summary,
+            note: served.stored.note,
+        })
     }
 }

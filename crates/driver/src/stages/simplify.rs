@@ -143,24 +143,51 @@ impl From<SimplifyFile> for SimplifyParams {
     }
 }
 
-/// `method = "desal" | "desal-refit"` (see [`SimplifyParams::method`]).
+/// `method = "desal" | "desal-refit" | "multipose"` (see [`SimplifyParams::method`]).
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
     Desal,
     DesalRefit,
+    /// Multi-pose QEM (Mohr & Gleicher 2003): the quadrics summed over the poses stage 2
+    /// reads, subset placement, the cost's other factors as configured; no seams.
+    Multipose,
 }
 
 impl Method {
     /// Every method, in the order documentation lists them.
-    pub const ALL: [Method; 2] = [Method::Desal, Method::DesalRefit];
+    pub const ALL: [Method; 3] = [Method::Desal, Method::DesalRefit, Method::Multipose];
 
     /// The method's name in pipeline files, on the command line and in Python.
     pub fn name(self) -> &'static str {
         match self {
             Method::Desal => "desal",
             Method::DesalRefit => "desal-refit",
+            Method::Multipose => "multipose",
         }
+    }
+
+    /// The keys of `[simplify]` the method sets itself.
+    fn own_keys(self) -> &'static [&'static str] {
+        match self {
+            Method::Desal | Method::DesalRefit => {
+                &["placement", "metric", "saliency", "balance", "normalized_error"]
+            }
+            Method::Multipose => &["placement"],
+        }
+    }
+
+    /// `config` with the settings the method makes itself.
+    pub fn settings(self, config: SimplifyConfig) -> SimplifyConfig {
+        match self {
+            Method::Desal | Method::DesalRefit => desal_settings(config),
+            Method::Multipose => SimplifyConfig { placement: Placement::Subset, ..config },
+        }
+    }
+
+    /// Whether the method reads the poses stage 2 read (its artifact records which).
+    fn reads_poses(self) -> bool {
+        matches!(self, Method::DesalRefit | Method::Multipose)
     }
 }
 
@@ -249,7 +276,7 @@ impl SimplifyParams {
         };
         if let Some(method) = self.method {
             self.check_method_settings(method)?;
-            config = desal_settings(config);
+            config = method.settings(config);
         }
         config.validate()?;
         Ok(config)
@@ -260,7 +287,7 @@ impl SimplifyParams {
     /// it was given ([`Self::given`]).
     fn check_method_settings(&self, method: Method) -> Result<()> {
         let default = SimplifyParams::default();
-        let desal = desal_settings(SimplifyConfig::default());
+        let own = method.settings(SimplifyConfig::default());
         // Each setting as a pipeline file spells it: given, default, the method's.
         let quoted = |name: &str| format!("\"{name}\"");
         let settings = [
@@ -268,25 +295,23 @@ impl SimplifyParams {
                 "placement",
                 quoted(self.placement.name()),
                 quoted(default.placement.name()),
-                quoted(desal.placement.name()),
+                quoted(own.placement.name()),
             ),
-            (
-                "metric",
-                quoted(self.metric.name()),
-                quoted(default.metric.name()),
-                quoted(desal.metric.name()),
-            ),
-            ("saliency", self.saliency.to_string(), default.saliency.to_string(), desal.saliency.to_string()),
-            ("balance", self.balance.to_string(), default.balance.to_string(), desal.balance.to_string()),
+            ("metric", quoted(self.metric.name()), quoted(default.metric.name()), quoted(own.metric.name())),
+            ("saliency", self.saliency.to_string(), default.saliency.to_string(), own.saliency.to_string()),
+            ("balance", self.balance.to_string(), default.balance.to_string(), own.balance.to_string()),
             (
                 "normalized_error",
                 self.normalized_error.to_string(),
                 default.normalized_error.to_string(),
-                desal.normalized_error.to_string(),
+                own.normalized_error.to_string(),
             ),
         ];
         for (key, value, default, wanted) in settings {
-            if value != wanted && (value != default || self.given.contains(&key)) {
+            if method.own_keys().contains(&key)
+                && value != wanted
+                && (value != default || self.given.contains(&key))
+            {
                 bail!(
                     "simplify: method = \"{}\" sets {key} = {wanted} itself; remove {key} = {value}",
                     method.name()
@@ -296,9 +321,10 @@ impl SimplifyParams {
         Ok(())
     }
 
-    /// Whether a dataset's seams go to stage 3 (`seams` absent or `keep`).
+    /// Whether a dataset's seams go to stage 3 (`seams` absent or `keep`, and a method
+    /// that takes seams: `multipose` takes none).
     pub fn keeps_seams(&self) -> bool {
-        self.seams.unwrap_or_default() == Seams::Keep
+        self.seams.unwrap_or_default() == Seams::Keep && self.method != Some(Method::Multipose)
     }
 
     /// The cache key of a simplification of `poses`' template without seams. The
@@ -321,9 +347,9 @@ impl SimplifyParams {
         let config = self.config()?;
         let refit = self.method == Some(Method::DesalRefit);
         let mut inputs = vec![("poses".to_owned(), poses)];
-        // `desal-refit` reads the poses stage 2 saw (recorded in its artifact) and fits
-        // the pose model on the labels.
-        if config.saliency || refit {
+        // `desal-refit` and `multipose` read the poses stage 2 saw (recorded in its
+        // artifact); `desal-refit` fits the pose model on the labels.
+        if config.saliency || self.method.is_some_and(Method::reads_poses) {
             inputs.push(("saliency".into(), saliency));
         }
         if config.part_borders != PartBorders::Ignore || refit {
@@ -549,8 +575,9 @@ pub fn compute_with_seams(
 }
 
 /// Multi-pose QEM (Mohr & Gleicher 2003) over `poses`, subset placement, as a stage-3
-/// output (`desal eval`'s `multipose` and its variants): with `config.saliency`, the cost
-/// is also weighted by stage 2's `weights`, as in [`compute`].
+/// output (`method = "multipose"`, and `desal eval`'s `multipose` and its variants): with
+/// `config.saliency`, the cost is also weighted by stage 2's `weights`, as in
+/// [`compute`].
 pub fn compute_multipose(
     config: &SimplifyConfig,
     poses: &PoseSet,
@@ -571,9 +598,9 @@ pub fn compute_multipose(
 
 /// Stage 3 as `desal run`, every hierarchy level and the Python package run it on
 /// `set`'s template, keyed by [`SimplifyParams::key_with_seams`]: `simplify.method`'s
-/// method when one is named (`desal-refit` fits the pose model on the poses `saliency`
-/// reads), else one run with `simplify`'s settings; `weights` are stage 2's, `seams` the
-/// template's attribute seams.
+/// method when one is named (`desal-refit` fits the pose model, and `multipose` sums its
+/// quadrics, over the poses `saliency` reads), else one run with `simplify`'s settings;
+/// `weights` are stage 2's, `seams` the template's attribute seams.
 pub fn run(
     simplify: &SimplifyParams,
     saliency: &SaliencyParams,
@@ -591,6 +618,10 @@ pub fn run(
             let mut out = refitted(&result);
             out.summary.seconds = started.elapsed().as_secs_f64();
             Ok(out)
+        }
+        Some(Method::Multipose) => {
+            let poses = set.subset(&saliency.seen_poses(set));
+            compute_multipose(&config, &poses, weights, labels)
         }
         method => {
             let mut out =
