@@ -376,8 +376,7 @@ class Hierarchy:
     down-sampler ``D[k]`` (n_{k+1} × n_k, a selection), the up-sampler ``U[k]``
     (n_k × n_{k+1}, rows sum to 1), ``map[k]`` (level k+1's vertex → level k's) and
     ``orig[k]`` (level k+1's vertex → level 0's); ``A[k]`` is level k's adjacency.
-    Matrices are ``scipy.sparse`` CSC when scipy is installed, else (row, col, data,
-    shape) COO tuples.
+    The matrices are ``scipy.sparse.csc_matrix`` (float64), built from the arrays.
     """
 
     def __init__(self, arrays: dict, report: Any = None):
@@ -393,12 +392,12 @@ class Hierarchy:
         self.orig = [self.arrays[f"orig{k + 1}"] for k in range(steps)]
 
     def _matrix(self, key: str) -> Any:
+        # Imported here, not with desal: scipy.sparse is a dependency, but a slow import
+        # for the calls that never make a hierarchy.
+        import scipy.sparse
+
         row, col, data = (self.arrays[f"{key}_{p}"] for p in ("row", "col", "data"))
         shape = tuple(int(n) for n in self.arrays[f"{key}_shape"])
-        try:
-            import scipy.sparse
-        except ImportError:
-            return (row, col, data, shape)
         return scipy.sparse.coo_matrix((data, (row, col)), shape=shape).tocsc()
 
     def save(self, path: PathArg) -> None:
