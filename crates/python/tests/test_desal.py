@@ -1,6 +1,6 @@
 """The desal Python package against the CLI's driver, on the bundled CC0 sample.
 
-    pip install ./crates/python && pip install pytest scipy trimesh
+    pip install ./crates/python && pip install pytest trimesh
     python -m pytest crates/python/tests
 """
 

@@ -24,7 +24,6 @@ when they are regular files, and written as ``desal run`` writes them (see
 
 from __future__ import annotations
 
-import io
 import json
 import math
 from dataclasses import dataclass, field
@@ -376,8 +375,7 @@ class Hierarchy:
     down-sampler ``D[k]`` (n_{k+1} × n_k, a selection), the up-sampler ``U[k]``
     (n_k × n_{k+1}, rows sum to 1), ``map[k]`` (level k+1's vertex → level k's) and
     ``orig[k]`` (level k+1's vertex → level 0's); ``A[k]`` is level k's adjacency.
-    Matrices are ``scipy.sparse`` CSC when scipy is installed, else (row, col, data,
-    shape) COO tuples.
+    The matrices are ``scipy.sparse.csc_matrix`` (float64), built from the arrays.
     """
 
     def __init__(self, arrays: dict, report: Any = None):
@@ -393,12 +391,12 @@ class Hierarchy:
         self.orig = [self.arrays[f"orig{k + 1}"] for k in range(steps)]
 
     def _matrix(self, key: str) -> Any:
+        # Imported here, not with desal: scipy.sparse is a dependency, but a slow import
+        # for the calls that never make a hierarchy.
+        import scipy.sparse
+
         row, col, data = (self.arrays[f"{key}_{p}"] for p in ("row", "col", "data"))
         shape = tuple(int(n) for n in self.arrays[f"{key}_shape"])
-        try:
-            import scipy.sparse
-        except ImportError:
-            return (row, col, data, shape)
         return scipy.sparse.coo_matrix((data, (row, col)), shape=shape).tocsc()
 
     def save(self, path: PathArg) -> None:
@@ -450,8 +448,13 @@ def load_hierarchy(path: PathArg) -> Hierarchy:
 
 def save_graphcmr(h: Hierarchy, path: PathArg) -> None:
     """Writes GraphCMR's own layout: object arrays of ``scipy.sparse`` CSC matrices under
-    ``A``, ``D``, ``U`` and the faces under ``F``. GraphCMR's code loads it unchanged with
-    ``np.load(path, allow_pickle=True, encoding="latin1")``. Needs scipy.
+    ``A``, ``D``, ``U`` (float64, made canonical) and the faces under ``F`` (int32 as
+    ``h`` has them, other integers as int64). GraphCMR's code loads it unchanged with
+    ``np.load(path, allow_pickle=True, encoding="latin1")``, in its pinned environment
+    (Python 3.6, numpy 1.15, scipy 1.2) as in numpy 2: the pickles inside name only
+    modules that both have, whatever numpy and scipy write the file (``desal/_graphcmr.py``
+    says how), and the same matrices give the same bytes. A matrix that is not
+    ``scipy.sparse`` or faces that are not (m, 3) integers raise :class:`InputError`.
 
     Written as every desal writer writes (``desal_io::write_atomic``): the whole file is
     built in memory, written beside ``path`` and renamed over it, so a reader sees the
@@ -459,20 +462,31 @@ def save_graphcmr(h: Hierarchy, path: PathArg) -> None:
     replaced by the file, its target left as it was; a character device (``/dev/null``)
     is written through; a folder, FIFO or socket raises :class:`InputError`.
     """
-    import scipy.sparse  # noqa: F401 - required: the file holds scipy matrices
+    import scipy.sparse
+
+    from . import _graphcmr
 
     if not isinstance(h, Hierarchy):
         raise InputError(f"h: must be a desal.Hierarchy, not {type(h).__name__}")
 
-    def objects(items: list) -> np.ndarray:
-        out = np.empty(len(items), dtype=object)
+    def matrices(name: str) -> list:
+        items = list(getattr(h, name))
         for k, item in enumerate(items):
-            out[k] = item
-        return out
+            if not scipy.sparse.issparse(item):
+                raise InputError(f"h.{name}[{k}]: must be a scipy.sparse matrix, not {type(item).__name__}")
+            items[k] = scipy.sparse.csc_matrix(item)
+        return items
 
-    buffer = io.BytesIO()
-    np.savez(buffer, A=objects(h.A), D=objects(h.D), U=objects(h.U), F=objects(h.faces))
-    _desal._write_file(path, buffer.getvalue())
+    def faces() -> list:
+        items = [np.asarray(f) for f in h.faces]
+        for k, f in enumerate(items):
+            if f.dtype.kind not in "iu" or f.ndim != 2 or f.shape[1] != 3:
+                raise InputError(f"h.faces[{k}]: must be (m, 3) integers, not {f.dtype} {f.shape}")
+        # int32 (as hierarchy.npz has them) or int64: the two integer types in the file.
+        return [f if f.dtype == np.int32 else f.astype(np.int64) for f in items]
+
+    arrays = dict(A=matrices("A"), D=matrices("D"), U=matrices("U"), F=faces())
+    _desal._write_file(path, _graphcmr.npz_bytes(arrays))
 
 
 def run(
