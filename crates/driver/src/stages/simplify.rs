@@ -852,6 +852,35 @@ mod tests {
     /// with another value than the method's, even when that value is the default (which
     /// the method would silently replace); left out, or given the method's value, it is
     /// accepted; and the keys of every accepted file are those of today.
+    /// `multipose` sets the placement only, reads the poses stage 2 read (the saliency
+    /// artifact is an input of its key, weighted or not) and takes no seams.
+    #[test]
+    fn multipose_sets_the_placement_reads_stage_2s_poses_and_takes_no_seams() {
+        let (poses, saliency, labels) =
+            (ContentHash::of(b"poses"), ContentHash::of(b"s"), ContentHash::of(b"l"));
+        let parsed: SimplifyParams =
+            toml::from_str("target_vertices = 100\nmethod = \"multipose\"\nsaliency = false").unwrap();
+        assert_eq!(parsed.method, Some(Method::Multipose));
+        let config = parsed.config().unwrap();
+        assert_eq!((config.placement, config.saliency, config.balance), (Placement::Subset, false, false));
+        assert!(!parsed.keeps_seams(), "multipose takes no seams");
+        let key = parsed.key(poses, saliency, labels).unwrap();
+        let roles: Vec<&str> = key.inputs.iter().map(|(role, _)| role.as_str()).collect();
+        assert_eq!(roles, ["poses", "saliency"]);
+        assert!(key.parameters.contains("\"method\":\"multipose\""), "{}", key.parameters);
+        let other_poses = parsed.key(poses, ContentHash::of(b"other"), labels).unwrap();
+        assert_ne!(other_poses.hash(), key.hash(), "other poses seen by stage 2");
+        // The cost's factors are the settings'; only the placement is the method's.
+        let weighted = SimplifyParams { saliency: true, balance: true, ..parsed.clone() };
+        let c = weighted.config().unwrap();
+        assert_eq!((c.saliency, c.balance), (true, true));
+        let err = SimplifyParams { placement: Placement::Optimal, given: vec!["placement"], ..parsed }
+            .config()
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("method = \"multipose\" sets placement = \"subset\" itself"), "{err}");
+    }
+
     #[test]
     fn d13_a_given_default_beside_a_method_is_refused() {
         let parse = |text: &str| toml::from_str::<SimplifyParams>(text).unwrap();

@@ -279,7 +279,9 @@ def simplify_pose_set(
     ``poses`` is a :class:`PoseSet`, or (P, V, 3) arrays with ``faces`` (F, 3) and
     ``labels`` (V,) (None: parts discovered from the poses). ``method`` is ``"paper"``
     (saliency and balance), ``"qslim"``, ``"saliency"``, ``"balance"``,
-    ``"multipose"`` (multi-pose QEM, subset placement), ``"desal"`` (desal's own
+    ``"multipose"`` (multi-pose QEM: the quadrics summed over the poses stage 2 reads,
+    subset placement, the plain quadric cost; ``method = "multipose"`` in a pipeline
+    file), ``"desal"`` (desal's own
     stage 3: the per-area quadric error, subset placement, no saliency;
     docs/eval/desal-method.md) or ``"desal-refit"`` (desal's whole method,
     the lowest deformation error on SCAPE: ``"desal"``, then again weighted where its
@@ -425,8 +427,8 @@ def hierarchy(
     """A multi-level hierarchy for mesh networks (COMA / GraphCMR style).
 
     ``levels`` are the coarse vertex counts, strictly decreasing (e.g. ``[2500, 625]``).
-    Each level is simplified from the one above by ``method`` (a cost, or ``"desal"`` or
-    ``"desal-refit"`` as in :func:`simplify_pose_set`; not ``"multipose"``); ``upsampler`` is
+    Each level is simplified from the one above by ``method`` (a cost, ``"multipose"``,
+    ``"desal"`` or ``"desal-refit"`` as in :func:`simplify_pose_set`); ``upsampler`` is
     ``"fitted"`` (least squares over the poses) or ``"barycentric"`` (COMA's rule).
     The same as ``[dataset.hierarchy]`` in a pipeline file.
     """
