@@ -30,7 +30,7 @@ for k in 0 1 2 3 4; do
 import glob, os, sys
 repo, scape, work, k = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
 names = [os.path.basename(f)[:-4] for f in sorted(glob.glob(f"{scape}/mesh*.ply"))]
-# desal_eval::folds: the non-template poses (template = mesh000, index 0) dealt round-robin.
+# desal_measures::folds: the non-template poses (template = mesh000, index 0) dealt round-robin.
 fold = [names[p] for p in range(1, len(names)) if (p - 1) % 5 == k]
 text = open(f"{repo}/pipelines/scape.toml").read()
 text = text.replace('out = "../out"', f'out = "{work}/fold{k}"').replace("../../shared/datasets/scape", scape)

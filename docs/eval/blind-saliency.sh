@@ -22,7 +22,7 @@ python3 - "$repo" "$scape" "$work" <<'PY'
 import glob, os, sys
 repo, scape, work = sys.argv[1:]
 names = [os.path.basename(f)[:-4] for f in sorted(glob.glob(f"{scape}/mesh*.ply"))]
-# desal_eval::folds: the non-template poses (template = mesh000, index 0) dealt round-robin.
+# desal_measures::folds: the non-template poses (template = mesh000, index 0) dealt round-robin.
 fold0 = [names[p] for p in range(1, len(names)) if (p - 1) % 5 == 0]
 text = open(f"{repo}/pipelines/scape.toml").read()
 text = text.replace('out = "../out"', f'out = "{work}/out"').replace("../../shared/datasets/scape", scape)

@@ -31,7 +31,7 @@ fn sample_pipeline(dir: &Path, poses_dir: &Path, target: usize) -> PathBuf {
     path
 }
 
-fn desal_eval(args: &[&str]) -> Output {
+fn desal_measures(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_desal-eval")).args(args).output().expect("desal-eval runs")
 }
 
@@ -39,7 +39,7 @@ fn desal_eval(args: &[&str]) -> Output {
 fn eval_ok(pipeline: &Path, methods: &str, extra: &[&str]) -> Value {
     let mut args = vec![pipeline.to_str().unwrap(), "--methods", methods, "--folds", "2", "--quiet"];
     args.extend_from_slice(extra);
-    let out = desal_eval(&args);
+    let out = desal_measures(&args);
     assert!(out.status.success(), "desal-eval failed: {}", stderr(&out));
     let json = pipeline.parent().unwrap().join("out/sample/eval/eval.json");
     serde_json::from_slice(&std::fs::read(json).unwrap()).unwrap()
@@ -119,16 +119,16 @@ fn every_requested_method_is_reported_and_the_saved_meshes_reproduce_the_figures
                 let what = format!("{name} {split} {pose}");
                 assert_close(
                     f(&figures["vs_simplified"]["v2f"]),
-                    desal_eval::v2f(&deformed, &ground_truth),
+                    desal_measures::v2f(&deformed, &ground_truth),
                     &what,
                 );
                 assert_close(
                     f(&figures["vs_simplified"]["v2v"]),
-                    desal_eval::v2v(&deformed, &ground_truth),
+                    desal_measures::v2v(&deformed, &ground_truth),
                     &what,
                 );
-                assert_close(f(&figures["vs_full"]["v2f"]), desal_eval::v2f(&deformed, &full), &what);
-                assert_close(f(&figures["vs_full"]["v2v"]), desal_eval::v2v(&deformed, &full), &what);
+                assert_close(f(&figures["vs_full"]["v2f"]), desal_measures::v2f(&deformed, &full), &what);
+                assert_close(f(&figures["vs_full"]["v2v"]), desal_measures::v2v(&deformed, &full), &what);
             }
             v2v_sum += f(&record["held_out"]["vs_simplified"]["v2v"]);
         }
@@ -291,7 +291,7 @@ fn upsampling_columns_vanish_for_a_method_that_keeps_every_vertex() {
 /// Each deformation model runs on the same simplification and is recorded; the part
 /// anchors of the default model keep the sample's held-out error below the paper's
 /// centroid placement (the sample's full-resolution floor: 1.46e-6 against 4.11e-5 m²
-/// v2v, `crates/eval/tests/floor.rs`), and LBS deforms the same mesh differently.
+/// v2v, `crates/measures/tests/floor.rs`), and LBS deforms the same mesh differently.
 #[test]
 fn the_deformation_model_is_chosen_by_name_and_recorded() {
     let dir = tempfile::tempdir().unwrap();
@@ -324,7 +324,7 @@ fn the_deformation_model_is_chosen_by_name_and_recorded() {
     assert!(f(&m["v2v"]["mean"]) > f(&floor["held_out_v2v"]), "{m} vs {floor}");
     let md = std::fs::read_to_string(dir.path().join("out/sample/eval/eval.md")).unwrap();
     assert!(md.contains("## The model's own floor (full resolution)"));
-    let out = desal_eval(&[
+    let out = desal_measures(&[
         pipeline.to_str().unwrap(),
         "--methods",
         "qslim-optimal",
@@ -384,8 +384,14 @@ fn the_models_floor_is_cached_and_a_forged_entry_is_measured_again() {
     let last = bytes.len() - 1;
     bytes[last] ^= 0x40;
     std::fs::write(&artifact, &bytes).unwrap();
-    let out =
-        desal_eval(&[pipeline.to_str().unwrap(), "--methods", "qslim-optimal", "--folds", "2", "--quiet"]);
+    let out = desal_measures(&[
+        pipeline.to_str().unwrap(),
+        "--methods",
+        "qslim-optimal",
+        "--folds",
+        "2",
+        "--quiet",
+    ]);
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(stderr(&out).contains("cache entry rejected"), "{}", stderr(&out));
     let json = std::fs::read(dir.path().join("out/sample/eval/eval.json")).unwrap();
@@ -539,7 +545,8 @@ fn the_sweep_at_the_main_target_repeats_the_main_tables_figures() {
     // Another tool's mesh has one vertex count: it cannot be swept.
     let template = data_samples().join("poses/00_rest.ply");
     let external = format!("external:x={}", template.display());
-    let out = desal_eval(&[pipeline.to_str().unwrap(), "--sweep", "--sweep-methods", &external, "--quiet"]);
+    let out =
+        desal_measures(&[pipeline.to_str().unwrap(), "--sweep", "--sweep-methods", &external, "--quiet"]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("'x' is another tool's mesh"), "{}", stderr(&out));
 }
@@ -551,21 +558,21 @@ fn bad_requests_fail_with_a_clear_message_and_leave_no_eval_folder() {
     let p = pipeline.to_str().unwrap();
     let eval_dir = dir.path().join("out/sample/eval");
 
-    let out = desal_eval(&[p, "--methods", "paper-best", "--quiet"]);
+    let out = desal_measures(&[p, "--methods", "paper-best", "--quiet"]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("unknown method 'paper-best'"), "{}", stderr(&out));
 
     // A missing external mesh is refused before the pipeline runs: nothing is written.
-    let out = desal_eval(&[p, "--methods", "external:cgal=/nonexistent/x.ply", "--quiet"]);
+    let out = desal_measures(&[p, "--methods", "external:cgal=/nonexistent/x.ply", "--quiet"]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("method 'cgal'") && stderr(&out).contains("x.ply"), "{}", stderr(&out));
     assert!(!dir.path().join("out").exists(), "nothing is written for a bad request");
 
-    let out = desal_eval(&[p, "--folds", "1", "--quiet"]);
+    let out = desal_measures(&[p, "--folds", "1", "--quiet"]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("at least 2 folds"), "{}", stderr(&out));
 
-    let out = desal_eval(&[p, "--model", "smpl", "--quiet"]);
+    let out = desal_measures(&[p, "--model", "smpl", "--quiet"]);
     assert!(!out.status.success());
     assert!(
         stderr(&out).contains("unknown deformation model 'smpl': use scape, scape-cv, scape-centroid, lbs"),
@@ -576,8 +583,16 @@ fn bad_requests_fail_with_a_clear_message_and_leave_no_eval_folder() {
 
     // Forty vertices cannot give sixteen parts three vertices each: the error names the
     // method and the part (one with no vertex, or one too small to fit).
-    let out =
-        desal_eval(&[p, "--methods", "qslim-optimal", "--target-vertices", "40", "--folds", "2", "--quiet"]);
+    let out = desal_measures(&[
+        p,
+        "--methods",
+        "qslim-optimal",
+        "--target-vertices",
+        "40",
+        "--folds",
+        "2",
+        "--quiet",
+    ]);
     assert!(!out.status.success());
     let message = stderr(&out);
     assert!(
@@ -611,7 +626,7 @@ fn scape_eval_reports_every_pose_and_moves_vertices_to_the_joints() {
     let pipeline = dir.path().join("scape.toml");
     std::fs::write(&pipeline, text).unwrap();
     let out =
-        desal_eval(&[pipeline.to_str().unwrap(), "--methods", "qslim-optimal,paper-optimal", "--quiet"]);
+        desal_measures(&[pipeline.to_str().unwrap(), "--methods", "qslim-optimal,paper-optimal", "--quiet"]);
     assert!(out.status.success(), "desal-eval failed: {}", stderr(&out));
     let eval_dir = dir.path().join("out/scape/eval");
     let report: Value = serde_json::from_slice(&std::fs::read(eval_dir.join("eval.json")).unwrap()).unwrap();

@@ -1,4 +1,4 @@
-//! The model's own floor, cached: `desal_eval::model_floor` fits the deformation model
+//! The model's own floor, cached: `desal_measures::model_floor` fits the deformation model
 //! on the full-resolution pose set six times (in-sample and per fold) and measures 140
 //! syntheses on SCAPE (6.9 s of a 20 s `desal eval pipelines/scape.toml --methods
 //! qslim-optimal`, its log says), and it depends on nothing a method changes. So it is a cache entry like a stage's (`<cache>/floor/<key>`,
@@ -8,7 +8,7 @@
 //! |---|---|
 //! | `stage_version` | [`VERSION`], of this measurement's glue |
 //! | `parameters` | the `--model` name and `--folds` |
-//! | `resolved` | the model's every setting (its `Debug` form, which lists every field), the hash of desal-eval's source ([`desal_eval::SOURCE`]: any change to a model or metric) and desal-fit's version (the part motions) |
+//! | `resolved` | the model's every setting (its `Debug` form, which lists every field), the hash of desal-measures' source ([`desal_measures::SOURCE`]: any change to a model or metric) and desal-fit's version (the part motions) |
 //! | `inputs` | the pose set's and the labels' content hashes |
 //!
 //! A corrupt or forged entry is refused and measured again, as a stage's is; a killed
@@ -18,8 +18,8 @@
 use std::time::Instant;
 
 use anyhow::Result;
-use desal_eval::{MeanErrors, ModelFloor, PoseModel};
 use desal_io::artifact::{ArtifactKind, FloorV1, read_artifact};
+use desal_measures::{MeanErrors, ModelFloor, PoseModel};
 
 use desal_driver::cache::{Cache, StageKey, canonical_json, read_entry_file};
 use desal_driver::stages::DatasetStages;
@@ -27,7 +27,7 @@ use desal_driver::stages::DatasetStages;
 /// The floor's stage id in the cache.
 pub const STAGE: &str = "floor";
 
-/// Version of what this module and `model_floor` in `super` add to desal-eval's
+/// Version of what this module and `model_floor` in `super` add to desal-measures'
 /// measurement (which poses, which motions): bumped when a floor figure changes.
 pub const VERSION: u32 = 1;
 
@@ -52,7 +52,7 @@ pub fn key(name: &str, model: &PoseModel, folds: usize, stages: &DatasetStages) 
         parameters: canonical_json(&Parameters { model: name, folds }),
         resolved: canonical_json(&Resolved {
             model: format!("{model:?}"),
-            eval_source: desal_eval::SOURCE,
+            eval_source: desal_measures::SOURCE,
             fit_version: desal_fit::VERSION,
         }),
         inputs: vec![("pose_set".into(), stages.poses.hash()?), ("labels".into(), stages.labels.hash()?)],

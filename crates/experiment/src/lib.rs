@@ -42,8 +42,8 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use desal_eval::SurfaceIndex;
 use desal_io::ply::{PlyWriteOptions, write_ply};
+use desal_measures::SurfaceIndex;
 use desal_mesh::{PoseSet, TriMesh, Vec3};
 use desal_simplify::Target;
 use rayon::prelude::*;
@@ -212,7 +212,7 @@ fn evaluate_dataset(
         Some(v) => Target::Vertices(v),
         None => dataset.spec.simplify.target(),
     };
-    let folds = desal_eval::folds(poses.pose_count(), poses.template, args.folds);
+    let folds = desal_measures::folds(poses.pose_count(), poses.template, args.folds);
     if folds.len() < 2 {
         bail!("held-out evaluation needs at least three poses (the template and two to hold out)");
     }
@@ -351,16 +351,16 @@ fn evaluate_dataset(
     Ok(eval_dir)
 }
 
-/// [`desal_eval::model_floor`] of `model` on the full-resolution pose set, driven by
+/// [`desal_measures::model_floor`] of `model` on the full-resolution pose set, driven by
 /// stage 1's rigid fit of that set, with `k` folds (the method runs' own).
 fn model_floor(
     inputs: &Inputs,
-    model: &desal_eval::PoseModel,
+    model: &desal_measures::PoseModel,
     k: usize,
     full_surfaces: &[SurfaceIndex],
-) -> Result<desal_eval::ModelFloor> {
+) -> Result<desal_measures::ModelFloor> {
     let transforms = measure::part_motions(&inputs.poses, &inputs.labels)?;
-    Ok(desal_eval::model_floor_indexed(
+    Ok(desal_measures::model_floor_indexed(
         &inputs.poses,
         &inputs.labels,
         &transforms,
@@ -445,7 +445,7 @@ fn build_report(
             .map(|(fold, test)| FoldRecord {
                 fold,
                 test_poses: test.clone(),
-                training_poses: desal_eval::training_poses(poses.pose_count(), test),
+                training_poses: desal_measures::training_poses(poses.pose_count(), test),
             })
             .collect(),
         baseline: baseline.map(|_| baseline_name.to_owned()),

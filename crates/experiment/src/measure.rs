@@ -19,13 +19,15 @@
 
 use std::borrow::Cow;
 
-use desal_eval::metrics::mean;
-use desal_eval::{SurfaceIndex, V2fHalves, VertexIndex};
+use desal_measures::metrics::mean;
+use desal_measures::{SurfaceIndex, V2fHalves, VertexIndex};
 use desal_mesh::{Face, PoseSet, TriMesh, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
-pub use desal_eval::deform::{DEFAULT_MODEL, Deformed, MODELS, ModelRun, deform, part_motions, pose_model};
+pub use desal_measures::deform::{
+    DEFAULT_MODEL, Deformed, MODELS, ModelRun, deform, part_motions, pose_model,
+};
 
 /// v2f and v2v of one deformed mesh against one target, in squared input units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -94,7 +96,7 @@ struct Seeds<'a> {
 
 /// Errors of `deformed` (with its surface index) against `target`, and the per-vertex
 /// squared distances of `deformed` to the target surface. Computed exactly as
-/// `desal_eval::v2f` and `desal_eval::v2v` compute them (the same distances, found from
+/// `desal_measures::v2f` and `desal_measures::v2v` compute them (the same distances, found from
 /// `seeds`), so that re-measuring saved meshes reproduces the figures.
 fn errors(
     deformed: &TriMesh,
@@ -161,7 +163,7 @@ impl RunSeeds {
         let coarse_surface = &coarse_template.surface;
         let nearest = |found: Option<(u32, f64)>| found.map_or(u32::MAX, |(i, _)| i);
         Self {
-            coarse_faces: desal_eval::vertex_faces(&coarse.faces, coarse.vertex_count()),
+            coarse_faces: desal_measures::vertex_faces(&coarse.faces, coarse.vertex_count()),
             coarse_vertices: (0..coarse.vertex_count() as u32).collect(),
             full_faces: template
                 .positions
@@ -328,8 +330,8 @@ mod tests {
         let seeds =
             Seeds { to_surface: &[3, 0, 1, 2], back: &[1, 0, 9, 1, 0], to_vertex: &[4, 4, 0, u32::MAX] };
         let (e, per_vertex) = errors(&a, &SurfaceIndex::new(&a), &Target::new(b.clone()), &seeds);
-        assert_eq!(e.v2f, desal_eval::v2f(&a, &b));
-        assert_eq!(e.v2v, desal_eval::v2v(&a, &b));
+        assert_eq!(e.v2f, desal_measures::v2f(&a, &b));
+        assert_eq!(e.v2v, desal_measures::v2v(&a, &b));
         assert_eq!(mean(&per_vertex), e.v2f_deformed_to_target);
         assert!(e.v2f_deformed_to_target <= e.v2v);
     }

@@ -25,8 +25,8 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
-use desal_eval::PoseModel;
 use desal_map::MapOutput;
+use desal_measures::PoseModel;
 use desal_mesh::{NoProgress, PartLabels, PoseSet, TriMesh};
 use desal_simplify::{Placement, SimplifyConfig, StopReason, Target};
 

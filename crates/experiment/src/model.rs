@@ -4,7 +4,7 @@
 //! rig's own skinning ([`crate::rig`]).
 
 use anyhow::{Context, Result, bail};
-use desal_eval::PoseModel;
+use desal_measures::PoseModel;
 
 use crate::measure::{self, Deformed};
 use crate::methods::{Inputs, SimplifiedSet};

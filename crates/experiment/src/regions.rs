@@ -16,7 +16,7 @@
 //! majority part (the model's rule, ties to the lowest id); a vertex to that of its
 //! position or its part.
 
-use desal_eval::VertexIndex;
+use desal_measures::VertexIndex;
 use desal_mesh::{EdgeTopology, PartLabels, TriMesh, Vec3};
 use serde::Serialize;
 

@@ -48,7 +48,7 @@ pub struct EvalReport {
 }
 
 /// The deformation model fitted and measured on the full-resolution pose set itself
-/// (`desal_eval::model_floor`, the same folds): the part of every method's error that no
+/// (`desal_measures::model_floor`, the same folds): the part of every method's error that no
 /// simplification removes, and how much of the held-out figure is extrapolation.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct FloorReport {

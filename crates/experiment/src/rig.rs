@@ -102,7 +102,7 @@ impl RigModel {
         let mut held_out = vec![None; pose_count];
         let mut fold_of_pose = vec![None; pose_count];
         for (k, test) in folds.iter().enumerate() {
-            let training = desal_eval::training_poses(pose_count, test);
+            let training = desal_measures::training_poses(pose_count, test);
             let (run, skinned) = self.fit_and_skin(set, Some(k), &training, test)?;
             for (&pose, positions) in test.iter().zip(skinned) {
                 held_out[pose] = Some(positions);

@@ -16,11 +16,11 @@
 //! - `deformed`: U · (the held-out deformed coarse pose of [`crate::measure::deform`]).
 
 use anyhow::{Context, Result};
-use desal_eval::SurfaceIndex;
 use desal_hierarchy::{
     ChainLevel, Coarse, CsrMatrix, Upsampled, Upsampler, composed_upsamplers, composed_upsamplers_per_mask,
     upsampling_errors_indexed,
 };
+use desal_measures::SurfaceIndex;
 use desal_mesh::{PoseSet, Vec3};
 use serde::Serialize;
 
@@ -92,7 +92,7 @@ pub fn measure(
     let masks: Vec<Vec<bool>> = folds
         .iter()
         .map(|test| {
-            let training = desal_eval::training_poses(full.pose_count(), test);
+            let training = desal_measures::training_poses(full.pose_count(), test);
             (0..full.pose_count()).map(|p| training.contains(&p)).collect()
         })
         .collect();

@@ -15,11 +15,11 @@
 //!   sum to 1 — the rule COMA's comment ("closest surface point on edge") describes. It
 //!   differs from COMA's numbers only for fine vertices whose projection is on an edge.
 //!
-//! The nearest triangle is the lowest-index one among equally near faces (desal-eval's
+//! The nearest triangle is the lowest-index one among equally near faces (desal-measures'
 //! BVH order), so the matrix is deterministic.
 
-use desal_eval::SurfaceIndex;
-use desal_eval::closest_point::closest_point_on_triangle;
+use desal_measures::SurfaceIndex;
+use desal_measures::closest_point::closest_point_on_triangle;
 use desal_mesh::{Face, Real, TriMesh, Vec3};
 use rayon::prelude::*;
 

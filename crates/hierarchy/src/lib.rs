@@ -21,7 +21,7 @@
 //! Units: the pose set's (metres for SCAPE); errors in squared units (m²).
 //!
 //! **Dependencies:** desal-mesh, plus — the one exception among stage crates —
-//! desal-eval, for its BVH, exact closest point on a triangle and v2f, so that the
+//! desal-measures, for its BVH, exact closest point on a triangle and v2f, so that the
 //! barycentric projection and the upsampling error use the same geometry as `desal eval`.
 //! No file formats here: `desal-io::npz` writes `hierarchy.npz`.
 //!

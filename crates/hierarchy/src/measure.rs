@@ -8,7 +8,7 @@
 //! the full faces against the full mesh), both in squared input units (m² for SCAPE).
 //! Measure on poses the upsampler was not fitted on to report it held out.
 
-use desal_eval::{SurfaceIndex, metrics::mean, v2f_halves_same_faces, vertex_faces};
+use desal_measures::{SurfaceIndex, metrics::mean, v2f_halves_same_faces, vertex_faces};
 use desal_mesh::{PoseSet, Real, TriMesh, Vec3};
 use rayon::prelude::*;
 

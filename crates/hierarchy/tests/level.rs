@@ -3,12 +3,12 @@
 //! exactly, the barycentric U equals a brute-force closest-point computation; plus input
 //! errors and thread-count independence.
 
-use desal_eval::closest_point::point_triangle_distance_sq;
 use desal_hierarchy::barycentric::projection_row;
 use desal_hierarchy::{
     ChainLevel, CsrMatrix, FittedConfig, HierarchyError, LevelInput, Neighbourhood, Upsampler, adjacency,
     build_level, composed_upsamplers, composed_upsamplers_per_mask, nest, upsampling_error,
 };
+use desal_measures::closest_point::point_triangle_distance_sq;
 use desal_mesh::{Face, Mat3, PoseSet, TriMesh, Vec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -25,8 +25,8 @@
 
 use std::collections::{HashMap, HashSet};
 
-use desal_eval::SurfaceIndex;
-use desal_eval::closest_point::point_triangle_distance_sq;
+use desal_measures::SurfaceIndex;
+use desal_measures::closest_point::point_triangle_distance_sq;
 use desal_mesh::{Face, PoseSet, Real, TriMesh, Vec3};
 use rayon::prelude::*;
 

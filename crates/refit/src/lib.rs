@@ -35,9 +35,9 @@
 
 use std::sync::OnceLock;
 
-use desal_eval::deform::{self, DeformError};
-use desal_eval::{PoseModel, SurfaceIndex};
 use desal_map::{MapConfig, MapError, MapMode, MapOutput};
+use desal_measures::deform::{self, DeformError};
+use desal_measures::{PoseModel, SurfaceIndex};
 use desal_mesh::{Face, NoProgress, PartLabels, PoseSet, TriMesh, Vec3};
 use desal_simplify::{Simplified, SimplifyConfig, SimplifyError, SimplifyInput};
 use rayon::prelude::*;

@@ -97,7 +97,10 @@ fn main() {
         let full = posed(&input, &input_weld, &by_name);
         for (m, ((_, rig), weld)) in methods.iter().zip(&welds).enumerate() {
             let mesh = posed(rig, weld, &by_name);
-            errors[m].push((desal_eval::metrics::v2f(&mesh, &full), desal_eval::metrics::v2v(&mesh, &full)));
+            errors[m].push((
+                desal_measures::metrics::v2f(&mesh, &full),
+                desal_measures::metrics::v2v(&mesh, &full),
+            ));
         }
     }
     let reference = methods.len() - 1;

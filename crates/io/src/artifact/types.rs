@@ -323,7 +323,7 @@ impl ArtifactBody for HierarchyLevelV1 {
 }
 
 /// A deformation model's own floor at full resolution (`desal eval`'s cached
-/// measurement, `desal_eval::model_floor`): mean v2v and v2f of the model fitted on the
+/// measurement, `desal_measures::model_floor`): mean v2v and v2f of the model fitted on the
 /// full-resolution pose set, in-sample and held out, in squared mesh units.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FloorV1 {

@@ -1,7 +1,7 @@
 //! The seeded point-to-surface queries of `desal eval`'s upsampling error, alone, for
 //! instruction counts (cachegrind) of `SurfaceIndex::distances_sq_seeded`:
 //!
-//!     cargo build --release -p desal-eval --example seeded_queries
+//!     cargo build --release -p desal-measures --example seeded_queries
 //!     RAYON_NUM_THREADS=1 valgrind --tool=cachegrind --cache-sim=no \
 //!       target/release/examples/seeded_queries ../shared/datasets/scape/mesh001.ply 4 [rings]
 //!
@@ -19,7 +19,7 @@
 
 use std::path::PathBuf;
 
-use desal_eval::SurfaceIndex;
+use desal_measures::SurfaceIndex;
 use desal_mesh::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

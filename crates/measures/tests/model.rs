@@ -4,8 +4,8 @@
 mod common;
 
 use common::{Tube, centroid, part_rotations};
-use desal_eval::gradient::{deformation_gradient, inverse_template_frame};
-use desal_eval::{ModelConfig, PoissonSolver, fit_model, folds, training_poses, v2f, v2v};
+use desal_measures::gradient::{deformation_gradient, inverse_template_frame};
+use desal_measures::{ModelConfig, PoissonSolver, fit_model, folds, training_poses, v2f, v2v};
 use desal_mesh::{Mat3, PoseSet, TriMesh, Vec3};
 
 fn max_distance(a: &[Vec3], b: &[Vec3]) -> f64 {
@@ -46,7 +46,7 @@ fn model_reproduces_its_training_poses() {
     let rotations = part_rotations(&poses, &tube.labels);
     let all: Vec<usize> = (0..poses.pose_count()).collect();
     let config =
-        ModelConfig { ridge: 1e-12, regression: desal_eval::Regression::Fixed, ..ModelConfig::default() };
+        ModelConfig { ridge: 1e-12, regression: desal_measures::Regression::Fixed, ..ModelConfig::default() };
     let model = fit_model(&poses, &tube.labels, &rotations, &all, &config).unwrap();
     assert_eq!(model.report().joint_count, 2);
     assert!(model.report().mean_q_residual < 1e-12, "{:?}", model.report());
@@ -85,7 +85,7 @@ fn regression_beats_rigid_parts_on_held_out_poses() {
 /// Inputs that do not fit the pose set are refused with the offending ids.
 #[test]
 fn mismatched_inputs_are_refused() {
-    use desal_eval::EvalError;
+    use desal_measures::EvalError;
     let tube = Tube::new(5, 6);
     let poses = tube.pose_set(2, 1);
     let mut rotations = part_rotations(&poses, &tube.labels);
@@ -122,7 +122,7 @@ fn scape_in_sample_error_beats_rigid_parts() {
     check_scape_in_sample(5);
 }
 
-/// The same over all 71 poses: `cargo test --release -p desal-eval --test model -- --ignored --nocapture`.
+/// The same over all 71 poses: `cargo test --release -p desal-measures --test model -- --ignored --nocapture`.
 #[test]
 #[ignore = "slow in debug builds (~15 s); run in release for the reported figure"]
 fn scape_in_sample_error_all_poses() {
@@ -142,8 +142,8 @@ fn scape_held_out_error() {
     // The pre-issue-17 model (fixed ridge, centroid placement): tests/floor.rs has the
     // new defaults.
     let config = ModelConfig {
-        regression: desal_eval::Regression::Fixed,
-        anchoring: desal_eval::Anchoring::Centroid,
+        regression: desal_measures::Regression::Fixed,
+        anchoring: desal_measures::Anchoring::Centroid,
         ..ModelConfig::default()
     };
     for test in folds(poses.pose_count(), poses.template, 5) {
@@ -219,7 +219,7 @@ fn broken_chain() -> (PoseSet, desal_mesh::PartLabels) {
 /// cannot: it misplaces every segment by centimetres to decimetres.
 #[test]
 fn anchoring_reproduces_a_rigidly_moved_chain() {
-    use desal_eval::{Anchoring, PartTransform, Regression};
+    use desal_measures::{Anchoring, PartTransform, Regression};
     let (poses, labels) = broken_chain();
     let transforms: Vec<PartTransform> = (0..3)
         .map(|k| PartTransform {
@@ -229,7 +229,7 @@ fn anchoring_reproduces_a_rigidly_moved_chain() {
         .collect();
     let truth: Vec<Vec3> =
         poses.poses[0].iter().zip(&labels.labels).map(|(x, &p)| transforms[p as usize].apply(x)).collect();
-    let rotations = vec![desal_eval::rotations_of(&[PartTransform::identity(); 3])];
+    let rotations = vec![desal_measures::rotations_of(&[PartTransform::identity(); 3])];
     for scale in [0.01, 0.1, 1.0] {
         let config = ModelConfig {
             regression: Regression::Fixed,
@@ -257,16 +257,16 @@ fn anchoring_reproduces_a_rigidly_moved_chain() {
 /// says so.
 #[test]
 fn anchoring_beats_the_centroid_on_held_out_poses() {
-    use desal_eval::{Anchoring, PoseModel};
+    use desal_measures::{Anchoring, PoseModel};
     let tube = Tube::new(31, 12);
     let poses = tube.pose_set(24, 5);
     let transforms = common::part_transforms(&poses, &tube.labels);
     let held_out_v2v = |anchoring| {
         let model = PoseModel::Scape(ModelConfig { anchoring, ..ModelConfig::default() });
-        desal_eval::model_floor(&poses, &tube.labels, &transforms, &model, 4).unwrap().held_out.v2v
+        desal_measures::model_floor(&poses, &tube.labels, &transforms, &model, 4).unwrap().held_out.v2v
     };
     let wide = held_out_v2v(Anchoring::Parts { scale: 0.1 });
-    let narrow = held_out_v2v(Anchoring::Parts { scale: desal_eval::DEFAULT_ANCHOR_SCALE });
+    let narrow = held_out_v2v(Anchoring::Parts { scale: desal_measures::DEFAULT_ANCHOR_SCALE });
     let centroid = held_out_v2v(Anchoring::Centroid);
     eprintln!(
         "tube held-out v2v: anchored 0.1 {wide:.3e}, anchored 0.02 {narrow:.3e}, centroid {centroid:.3e}"

@@ -5,11 +5,11 @@
 //! 5 folds). The part motions are stage 1's own fit (desal-fit).
 //!
 //! The figures are slow in debug builds; run them in release:
-//! `cargo test --release -p desal-eval --test floor -- --ignored --nocapture --test-threads 1`
+//! `cargo test --release -p desal-measures --test floor -- --ignored --nocapture --test-threads 1`
 
 mod common;
 
-use desal_eval::{Anchoring, LbsConfig, ModelConfig, ModelFloor, PoseModel, Regression, model_floor};
+use desal_measures::{Anchoring, LbsConfig, ModelConfig, ModelFloor, PoseModel, Regression, model_floor};
 use desal_mesh::{PartLabels, PoseSet};
 
 const FOLDS: usize = 5;

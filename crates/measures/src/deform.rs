@@ -87,7 +87,7 @@ pub const MODELS: &[&str] = &["scape", "scape-cv", "scape-centroid", "lbs"];
 
 /// The model `desal eval` uses when none is named: the part-anchored SCAPE model, the
 /// lowest held-out error at full resolution on SCAPE (6.77e-5 m² v2v, against 1.79e-4
-/// placed by the centroid and 9.24e-5 for LBS; `crates/eval/tests/floor.rs`).
+/// placed by the centroid and 9.24e-5 for LBS; `crates/measures/tests/floor.rs`).
 pub const DEFAULT_MODEL: &str = "scape";
 
 /// The deformation model named `name` (one of [`MODELS`]).

@@ -155,7 +155,7 @@ pub fn load_scape(dir: &Path) -> (PoseSet, PartLabels) {
 
 /// `transforms[pose][part]`: stage 1's rigid fit (desal-fit, the real stage) of each part
 /// from the template to each pose, as the models take it.
-pub fn part_transforms(poses: &PoseSet, labels: &PartLabels) -> Vec<Vec<desal_eval::PartTransform>> {
+pub fn part_transforms(poses: &PoseSet, labels: &PartLabels) -> Vec<Vec<desal_measures::PartTransform>> {
     let fit =
         desal_fit::fit_pose_set(poses, labels, &desal_fit::FitConfig::default(), &desal_mesh::NoProgress)
             .expect("stage 1 fits the pose set");
@@ -164,7 +164,7 @@ pub fn part_transforms(poses: &PoseSet, labels: &PartLabels) -> Vec<Vec<desal_ev
         .map(|parts| {
             parts
                 .iter()
-                .map(|f| desal_eval::PartTransform { rotation: f.linear, translation: f.translation })
+                .map(|f| desal_measures::PartTransform { rotation: f.linear, translation: f.translation })
                 .collect()
         })
         .collect()

@@ -4,13 +4,13 @@
 //! with a message when SCAPE is absent; a 2500-vertex synthetic tube gives the cost at
 //! the paper's simplified size.
 //!
-//! Run: `cargo bench -p desal-eval --bench eval`.
+//! Run: `cargo bench -p desal-measures --bench eval`.
 
 #[path = "../tests/common/mod.rs"]
 mod common;
 
 use criterion::Criterion;
-use desal_eval::{ModelConfig, fit_model, v2f, v2v};
+use desal_measures::{ModelConfig, fit_model, v2f, v2v};
 use desal_mesh::{Mat3, PartLabels, PoseSet, Vec3};
 
 struct Scape {

@@ -4,7 +4,9 @@
 mod common;
 
 use common::{Tube, centroid, rotation};
-use desal_eval::{EvalError, LbsConfig, PartTransform, PoissonSolver, fit_lbs, folds, training_poses, v2v};
+use desal_measures::{
+    EvalError, LbsConfig, PartTransform, PoissonSolver, fit_lbs, folds, training_poses, v2v,
+};
 use desal_mesh::{Mat3, PartLabels, PoseSet, TriMesh, Vec3};
 use proptest::prelude::*;
 
@@ -89,7 +91,7 @@ fn lbs_beats_rigid_parts_on_held_out_poses() {
     let solver = PoissonSolver::new(poses.template_positions(), &poses.faces).unwrap();
     let mesh = |positions: Vec<Vec3>| TriMesh { positions, faces: poses.faces.clone() };
     let triangle_parts =
-        desal_eval::Skeleton::new(poses.template_positions(), &poses.faces, &tube.labels, None)
+        desal_measures::Skeleton::new(poses.template_positions(), &poses.faces, &tube.labels, None)
             .triangle_parts;
     let (mut lbs_error, mut rigid_error) = (0.0, 0.0);
     for &p in test {

@@ -15,7 +15,7 @@ use desal_mesh::{Real, Vec3};
 /// Primitives per leaf. Large, because a leaf is scanned through its primitives' boxes
 /// (contiguous, a few flops each) while every inner node costs a stack entry and two
 /// scattered boxes: v2f of a synthesised SCAPE pose against its truth (25 k queries into
-/// 25 k triangles, `cargo bench -p desal-eval --bench eval`) took 65 ms with 4 per leaf
+/// 25 k triangles, `cargo bench -p desal-measures --bench eval`) took 65 ms with 4 per leaf
 /// and 36 ms with 32, same load.
 const LEAF_SIZE: usize = 32;
 

@@ -1,7 +1,7 @@
 //! v2f and v2v against brute-force references on small random meshes, and the ordering
 //! between them that the paper's Table 1 contradicts.
 
-use desal_eval::{SurfaceIndex, VertexIndex, v2f, v2f_halves, v2v, vertex_errors, vertex_faces};
+use desal_measures::{SurfaceIndex, VertexIndex, v2f, v2f_halves, v2v, vertex_errors, vertex_faces};
 use desal_mesh::{TriMesh, Vec3};
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
