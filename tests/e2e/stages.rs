@@ -199,6 +199,63 @@ fn simplify_binary_takes_plain_files_and_refuses_a_saliency_of_the_wrong_length(
     assert_ne!(quadric.positions, lt.positions);
 }
 
+/// `desal simplify`'s flags are `[simplify]`'s knobs: part borders are kept from a labels
+/// file (and the border vertices stay where they were), a switch takes `false` as a
+/// pipeline file does, and the methods that read the poses are refused.
+#[test]
+fn simplify_binary_offers_the_knobs_of_a_pipeline_file() {
+    let dir = tempfile::tempdir().unwrap();
+    write_tube_dataset(dir.path(), "");
+    let (input, labels) = (dir.path().join("poses/p0.ply"), dir.path().join("labels.txt"));
+    let output = dir.path().join("small.ply");
+    let simplify = |extra: &[&str]| {
+        desal(
+            &["simplify", "--input", input.to_str().unwrap(), "--output", output.to_str().unwrap()]
+                .into_iter()
+                .chain(extra.iter().copied())
+                .collect::<Vec<_>>(),
+        )
+    };
+    let out = simplify(&["--target-vertices", "40", "--keep-part-borders"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("give --labels"), "{}", stderr(&out));
+    let out = simplify(&["--target-vertices", "40", "--labels", labels.to_str().unwrap()]);
+    assert!(stderr(&out).contains("only with --keep-part-borders"), "{}", stderr(&out));
+    assert!(!output.exists(), "no partial output");
+
+    let kept = simplify(&[
+        "--target-vertices",
+        "40",
+        "--placement",
+        "subset",
+        "--keep-part-borders",
+        "--labels",
+        labels.to_str().unwrap(),
+    ]);
+    assert!(kept.status.success(), "{}", stderr(&kept));
+    let kept = desal_io::read_mesh(&output).unwrap();
+    let free =
+        simplify(&["--target-vertices", "40", "--placement", "subset", "--keep-part-borders", "false"]);
+    assert!(free.status.success(), "{}", stderr(&free));
+    let free = desal_io::read_mesh(&output).unwrap();
+    assert_ne!(kept.positions, free.positions, "locking the border changes the result");
+    // Every input vertex on the border between the two parts is still there.
+    let mesh = desal_io::read_mesh(&input).unwrap();
+    let ids = desal_io::labels::read_labels(&labels).unwrap().labels;
+    let on_border = |v: usize| {
+        mesh.faces.iter().any(|f| f.contains(&(v as u32)) && f.iter().any(|&w| ids[w as usize] != ids[v]))
+    };
+    for v in (0..mesh.vertex_count()).filter(|&v| on_border(v)) {
+        assert!(kept.positions.contains(&mesh.positions[v]), "border vertex {v} was collapsed");
+    }
+
+    for method in ["multipose", "desal-refit"] {
+        let out = simplify(&["--target-vertices", "40", "--method", method]);
+        assert!(!out.status.success());
+        assert!(stderr(&out).contains("use `desal run`"), "{method}: {}", stderr(&out));
+    }
+}
+
 #[test]
 fn run_never_takes_over_a_folder_it_did_not_write_and_keeps_eval() {
     let dir = tempfile::tempdir().unwrap();

@@ -7,10 +7,6 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use desal_io::artifact::{self, ArtifactBody, FitV1, LabelsV1, PoseSetV1, SaliencyV1};
 use desal_mesh::NoProgress;
-use desal_simplify::{Metric, Placement};
-// The flags' defaults (`default_value_t`) are the library's.
-#[cfg(feature = "cli")]
-use desal_simplify::SimplifyConfig;
 
 use crate::outputs::{FileWriter, write_all_or_nothing};
 use crate::stages;
@@ -105,7 +101,9 @@ pub struct MapArgs {
     pub rig: Option<PathBuf>,
 }
 
-/// `desal simplify`: stage 3 on a plain mesh, optionally weighted by saliency.
+/// `desal simplify`: stage 3 on a plain mesh, optionally weighted by saliency. Its knobs
+/// are `[simplify]`'s ([`stages::simplify::SimplifyKnobs`]); the rest are its inputs and
+/// the benchmark flag `--repeat`.
 #[derive(Debug)]
 #[cfg_attr(feature = "cli", derive(clap::Args))]
 #[cfg_attr(feature = "cli", command(group(clap::ArgGroup::new("target").required(true).args(["target_faces", "target_vertices", "ratio"]))))]
@@ -116,15 +114,8 @@ pub struct SimplifyArgs {
     /// Output mesh (PLY), written atomically.
     #[cfg_attr(feature = "cli", arg(long))]
     pub output: PathBuf,
-    /// Stop at this many faces.
-    #[cfg_attr(feature = "cli", arg(long))]
-    pub target_faces: Option<usize>,
-    /// Stop at this many vertices.
-    #[cfg_attr(feature = "cli", arg(long))]
-    pub target_vertices: Option<usize>,
-    /// Keep this fraction of the faces, in (0, 1].
-    #[cfg_attr(feature = "cli", arg(long))]
-    pub ratio: Option<f64>,
+    #[cfg_attr(feature = "cli", command(flatten))]
+    pub knobs: stages::simplify::SimplifyKnobs,
     /// Per-vertex saliency: a `saliency.dsa` artifact (its floored weights are used), a
     /// PLY with a float vertex property `saliency`, or a text file with one number in
     /// [0, 1] per line (`#` comments allowed). Enables the saliency factor of the cost.
@@ -134,45 +125,14 @@ pub struct SimplifyArgs {
     /// or replacing an artifact's floor. Default: the artifact's, else 0.05.
     #[cfg_attr(feature = "cli", arg(long))]
     pub floor: Option<f64>,
-    /// Where a collapsed edge's vertex goes: `optimal` (the paper) or `subset` (keep
-    /// original vertices).
-    #[cfg_attr(feature = "cli", arg(long, default_value_t = SimplifyConfig::default().placement))]
-    pub placement: Placement,
-    /// Multiply the cost by the edge length (the paper's "balancing" term; with
-    /// `--saliency` this is the paper's method). Off by default, as in pipeline files.
+    /// Part labels of the mesh's vertices (a labels `.txt` or `.json`), for
+    /// `--keep-part-borders`.
     #[cfg_attr(feature = "cli", arg(long))]
-    pub balance: bool,
-    /// The error the collapses minimise: `quadric` (Garland–Heckbert, the paper's Q) or
-    /// `lindstrom-turk` (memoryless volume and boundary preservation, CGAL's default;
-    /// lower surface error on a single mesh, see BENCHMARKS.md).
-    #[cfg_attr(feature = "cli", arg(long, default_value_t = SimplifyConfig::default().metric))]
-    pub metric: Metric,
-    /// Weight of the boundary constraint quadrics (see `boundary_weight` in
-    /// pipelines/README.md).
-    #[cfg_attr(feature = "cli", arg(long, default_value_t = SimplifyConfig::default().boundary_weight))]
-    pub boundary_weight: f64,
-    /// Refuse collapses that leave a face more than this many degrees from the input
-    /// normals of its corners' vertices (the fold guard; 180 switches it off).
-    #[cfg_attr(feature = "cli", arg(long, default_value_t = SimplifyConfig::default().max_corner_normal_deg))]
-    pub max_corner_normal_deg: f64,
-    /// Rank collapses by the quadric error per unit area (meshoptimizer's error;
-    /// `normalized_error` in pipeline files).
-    #[cfg_attr(feature = "cli", arg(long))]
-    pub normalized_error: bool,
-    /// `desal`: desal's own method, which sets the placement, cost and metric itself
-    /// (`method` in pipeline files). `desal-refit` needs the poses: use `desal run`.
-    #[cfg_attr(feature = "cli", arg(long, value_parser = parse_method))]
-    pub method: Option<stages::simplify::Method>,
+    pub labels: Option<PathBuf>,
     /// Run the simplification this many times and print SIMPLIFY_SECONDS=<best>
     /// (simplification alone, no I/O), for the peers' benchmark harness.
     #[cfg_attr(feature = "cli", arg(long))]
     pub repeat: Option<usize>,
-}
-
-/// `--method`: a stage-3 method by its name in pipeline files.
-#[cfg(feature = "cli")]
-fn parse_method(name: &str) -> Result<stages::simplify::Method, String> {
-    name.parse()
 }
 
 fn read<T: ArtifactBody>(path: &Path) -> Result<(T, desal_io::ContentHash)> {
@@ -314,43 +274,45 @@ pub fn map(args: &MapArgs) -> Result<()> {
 
 pub fn simplify(args: &SimplifyArgs) -> Result<()> {
     use desal_simplify::SimplifyInput;
+    use stages::simplify::{Method, SimplifyParams};
     let mut mesh = desal_io::read_mesh(&args.input)?;
     mesh.faces = clean_faces_with_warnings(&args.input, &mesh.faces).0;
     let weights = match &args.saliency {
         Some(path) => Some(read_weights(path, args.floor, mesh.vertex_count())?),
         None => None,
     };
-    if [args.target_faces.is_some(), args.target_vertices.is_some(), args.ratio.is_some()] == [false; 3] {
+    let k = &args.knobs;
+    if [k.target_faces.is_some(), k.target_vertices.is_some(), k.ratio.is_some()] == [false; 3] {
         anyhow::bail!("give one of --target-faces, --target-vertices, --ratio");
     }
-    if args.method == Some(stages::simplify::Method::DesalRefit) {
+    if let Some(method @ (Method::DesalRefit | Method::Multipose)) = k.method {
         anyhow::bail!(
-            "--method desal-refit refits the pose model over the poses: use `desal run` with a pipeline file"
+            "--method {} reads the poses, and a plain mesh has one: use `desal run` with a pipeline file",
+            method.name()
         );
     }
-    // The flags are `[simplify]`'s keys: the same parameters resolve them (a plain mesh
-    // has no part labels, so part borders are not kept).
-    let params = stages::simplify::SimplifyParams {
-        target_vertices: args.target_vertices,
-        target_faces: args.target_faces,
-        ratio: args.ratio,
-        placement: args.placement,
-        saliency: weights.is_some(),
-        balance: args.balance,
-        keep_part_borders: false,
-        metric: args.metric,
-        boundary_weight: Some(args.boundary_weight),
-        normalized_error: args.normalized_error,
-        max_corner_normal_deg: Some(args.max_corner_normal_deg),
-        seams: None,
-        method: args.method,
-        given: Vec::new(),
-    };
+    // The flags are `[simplify]`'s keys, resolved by the same parameters; saliency is on
+    // when weights are read.
+    let params = SimplifyParams::from(stages::simplify::SimplifyKnobs {
+        saliency: Some(weights.is_some()),
+        ..k.clone()
+    });
     let config = params.config()?;
-    let mut input = SimplifyInput::new(&mesh);
-    if let Some(w) = &weights {
-        input = input.with_weights(w);
-    }
+    let labels = match (&args.labels, params.keep_part_borders) {
+        (Some(path), true) => {
+            let labels = desal_io::labels::read_labels(path)?;
+            labels.check_vertex_count(mesh.vertex_count()).with_context(|| format!("{}", path.display()))?;
+            Some(labels)
+        }
+        (None, true) => anyhow::bail!("--keep-part-borders needs the mesh's part labels: give --labels"),
+        (Some(path), false) => {
+            anyhow::bail!("{}: --labels is read only with --keep-part-borders", path.display())
+        }
+        (None, false) => None,
+    };
+    let ids = labels.as_ref().map_or(&[][..], |l| l.labels.as_slice());
+    let input =
+        SimplifyInput::new(&mesh).with_inputs_read_by(&config, weights.as_deref().unwrap_or(&[]), ids);
     let mut best = f64::INFINITY;
     let mut result = None;
     for _ in 0..args.repeat.unwrap_or(1).max(1) {
@@ -564,6 +526,7 @@ pub fn parts(args: &PartsArgs) -> Result<()> {
 mod tests {
     use super::*;
     use clap::Parser;
+    use desal_simplify::SimplifyConfig;
 
     #[derive(Debug, Parser)]
     struct Simplify {
@@ -594,11 +557,9 @@ mod tests {
         let library = SimplifyConfig::default();
         let pipeline = stages::simplify::SimplifyParams::default().config().unwrap();
         assert_eq!(pipeline, library, "pipeline files resolve to the library's defaults");
-        assert_eq!(cli.placement, library.placement);
-        assert_eq!(cli.balance, library.balance);
-        assert_eq!(cli.metric, library.metric);
-        assert_eq!(cli.boundary_weight, library.boundary_weight);
-        assert_eq!(cli.max_corner_normal_deg, library.max_corner_normal_deg);
+        // The flags are `[simplify]`'s knobs: left out, they resolve as a pipeline file's do.
+        let from_cli = stages::simplify::SimplifyParams::from(cli.knobs).config().unwrap();
+        assert_eq!(from_cli, SimplifyConfig { target: desal_simplify::Target::Ratio(0.5), ..library });
 
         let cli =
             Fit::try_parse_from(["desal-fit", "--poses", "p", "--labels", "l", "-o", "o"]).unwrap().args;

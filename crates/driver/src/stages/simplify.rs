@@ -26,7 +26,7 @@ pub const TARGET_KEYS: [&str; 3] = ["target_vertices", "target_faces", "ratio"];
 /// ([`SimplifyConfig::default`]), so pipeline files, `desal-simplify` and the library
 /// agree (README, "Defaults").
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(from = "SimplifyFile")]
+#[serde(from = "SimplifyKnobs")]
 pub struct SimplifyParams {
     /// Target vertex count (the paper: 2500). At most one of the three targets is
     /// given; none means the library's default target (`ratio = 0.2`).
@@ -83,27 +83,70 @@ pub struct SimplifyParams {
     pub given: Vec<&'static str>,
 }
 
-/// `[simplify]` as a file spells it, for [`SimplifyParams`]' `Deserialize`: the settings
-/// a method makes itself are `None` when absent, so that a method can tell a given
-/// setting from a default one.
-#[derive(Deserialize)]
+/// The stage-3 knobs as the front ends spell them, declared once: `[simplify]` in pipeline
+/// files (and Python's `simplify=` table) and `desal simplify`'s flags. A setting left out
+/// is `None`, so that [`SimplifyParams`] fills in the library's default and a method can
+/// tell a given setting from a default one. The flags' help is these docs.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[cfg_attr(feature = "cli", derive(clap::Args))]
 #[serde(deny_unknown_fields)]
-struct SimplifyFile {
-    target_vertices: Option<usize>,
-    target_faces: Option<usize>,
-    ratio: Option<f64>,
+pub struct SimplifyKnobs {
+    /// Stop at this many vertices (the paper: 2500). One target at most; none: 20 % of
+    /// the faces.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub target_vertices: Option<usize>,
+    /// Stop at this many faces.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub target_faces: Option<usize>,
+    /// Keep this fraction of the faces, in (0, 1].
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub ratio: Option<f64>,
+    /// Where a collapsed edge's vertex goes: `optimal` (the paper; the default) or
+    /// `subset` (keep original vertices).
     #[serde(default, deserialize_with = "some_by_name")]
-    placement: Option<Placement>,
-    saliency: Option<bool>,
-    balance: Option<bool>,
-    keep_part_borders: Option<bool>,
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub placement: Option<Placement>,
+    /// Weight the cost by deformation saliency (default on). `desal simplify` turns it on
+    /// by reading weights (`--saliency FILE`).
+    #[cfg_attr(feature = "cli", arg(skip))]
+    pub saliency: Option<bool>,
+    /// Multiply the cost by the edge length (the paper's balance term; with saliency, the
+    /// paper's method). Off by default.
+    #[cfg_attr(feature = "cli", arg(long, num_args = 0..=1, default_missing_value = "true"))]
+    pub balance: Option<bool>,
+    /// Lock vertices on the border between two parts (needs part labels). Off by default.
+    #[cfg_attr(feature = "cli", arg(long, num_args = 0..=1, default_missing_value = "true"))]
+    pub keep_part_borders: Option<bool>,
+    /// The error the collapses minimise: `quadric` (Garland–Heckbert, the paper's Q; the
+    /// default) or `lindstrom-turk` (memoryless, CGAL's default; lower surface error on
+    /// one mesh, see BENCHMARKS.md).
     #[serde(default, deserialize_with = "some_by_name")]
-    metric: Option<Metric>,
-    boundary_weight: Option<f64>,
-    normalized_error: Option<bool>,
-    max_corner_normal_deg: Option<f64>,
-    seams: Option<Seams>,
-    method: Option<Method>,
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub metric: Option<Metric>,
+    /// Weight of the boundary constraint quadrics (× edge length²); default 10.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub boundary_weight: Option<f64>,
+    /// Rank collapses by the quadric error per unit area (meshoptimizer's error; the
+    /// `desal` method's). Off by default.
+    #[cfg_attr(feature = "cli", arg(long, num_args = 0..=1, default_missing_value = "true"))]
+    pub normalized_error: Option<bool>,
+    /// The fold guard: no collapse leaves a face more than this many degrees from its
+    /// corners' input normals (180 switches it off); default 70.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub max_corner_normal_deg: Option<f64>,
+    /// A rig's attribute seams: `keep` (the default) or `ignore`. Rig datasets only.
+    #[cfg_attr(feature = "cli", arg(skip))]
+    pub seams: Option<Seams>,
+    /// One of stage 3's methods, which set some of the settings above themselves:
+    /// `desal`, `desal-refit`, `multipose` (see [`SimplifyParams::method`]).
+    #[cfg_attr(feature = "cli", arg(long, value_parser = parse_method))]
+    pub method: Option<Method>,
+}
+
+/// `--method`: a stage-3 method by its name in pipeline files.
+#[cfg(feature = "cli")]
+fn parse_method(name: &str) -> Result<Method, String> {
+    name.parse()
 }
 
 fn some_by_name<'de, T, D>(deserializer: D) -> std::result::Result<Option<T>, D::Error>
@@ -114,8 +157,8 @@ where
     crate::cache::by_name::deserialize(deserializer).map(Some)
 }
 
-impl From<SimplifyFile> for SimplifyParams {
-    fn from(file: SimplifyFile) -> Self {
+impl From<SimplifyKnobs> for SimplifyParams {
+    fn from(file: SimplifyKnobs) -> Self {
         let default = SimplifyParams::default();
         let given = [
             ("placement", file.placement.is_some()),
