@@ -85,6 +85,34 @@ pub const ALL: &[&str] = &[
 /// The reference row of every relative change.
 pub const BASELINE: &str = "qslim-optimal";
 
+/// A peer that is a cargo feature of this crate: the feature, the names of its methods
+/// and whether this build has it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Peer {
+    pub feature: &'static str,
+    pub methods: &'static [&'static str],
+    pub built: bool,
+}
+
+/// Every peer behind a feature, so that a build without one still knows its methods'
+/// names and refuses them saying which feature builds them. The names are those of the
+/// peer module's `Variant::name` (a test checks it for the peers built).
+pub const PEERS: &[Peer] = &[Peer {
+    feature: "meshopt",
+    methods: &["meshopt", "meshopt-regularize", "meshopt-priority"],
+    built: cfg!(feature = "meshopt"),
+}];
+
+/// The error for a method of a peer that `peers` says this build lacks; `None` for every
+/// other name (a method this build runs, or one no peer has).
+fn not_built(peers: &[Peer], text: &str) -> Option<String> {
+    let peer = peers.iter().find(|p| !p.built && p.methods.contains(&text))?;
+    let feature = peer.feature;
+    Some(format!(
+        "{text}: this desal was built without the `{feature}` feature; build with `--features {feature}`"
+    ))
+}
+
 impl Method {
     /// The method's name in tables, file names and `eval.json`.
     pub fn name(&self) -> String {
@@ -109,14 +137,20 @@ impl Method {
             let (name, path) = spec
                 .split_once('=')
                 .with_context(|| format!("'{text}': an external method is written external:NAME=PATH"))?;
+            // A peer's names stay reserved in a build without it, so that a name in
+            // eval.json means the same method whatever the build.
             let valid = !name.is_empty()
                 && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
                 && !ALL.contains(&name)
-                && !OPTIONAL.contains(&name);
+                && !OPTIONAL.contains(&name)
+                && !PEERS.iter().any(|p| p.methods.contains(&name));
             if !valid {
                 bail!("'{text}': NAME must be letters, digits, '-' or '_', and not a built-in method name");
             }
             return Ok(Method::External { name: name.into(), path: PathBuf::from(path) });
+        }
+        if let Some(refusal) = not_built(PEERS, text) {
+            bail!(refusal);
         }
         // desal's own methods, by the names `[simplify] method` gives them.
         if let Ok(own) = text.parse::<simplify::Method>() {
@@ -463,6 +497,53 @@ mod tests {
             assert!(Method::parse("external:meshopt=x.ply").is_err(), "shadows a built-in");
             assert_eq!(Method::parse("meshopt-priority").unwrap().placement(), "subset");
         }
+    }
+
+    /// In every build, each peer's method parses when its feature is built and is
+    /// otherwise refused with a message naming the method and the feature; either way
+    /// its name cannot be taken by an external mesh.
+    #[test]
+    fn a_peer_not_built_is_refused_by_name_with_its_feature() {
+        for peer in PEERS {
+            for &name in peer.methods {
+                match Method::parse(name) {
+                    Ok(method) => {
+                        assert!(peer.built, "{name} parsed without the `{}` feature", peer.feature);
+                        assert_eq!(method.name(), name);
+                    }
+                    Err(error) => {
+                        assert!(!peer.built, "{name}: {error}");
+                        let message = error.to_string();
+                        assert!(message.starts_with(&format!("{name}: ")), "{message}");
+                        assert!(message.contains(&format!("--features {}", peer.feature)), "{message}");
+                        assert!(!message.contains("unknown method"), "{message}");
+                    }
+                }
+                assert!(Method::parse(&format!("external:{name}=x.ply")).is_err(), "{name} is reserved");
+            }
+        }
+        // The rule itself, on a table where meshopt is missing, whatever this build has.
+        let without = [Peer { built: false, ..PEERS[0] }];
+        let refusal = not_built(&without, "meshopt-priority").unwrap();
+        assert_eq!(
+            refusal,
+            "meshopt-priority: this desal was built without the `meshopt` feature; build with `--features meshopt`"
+        );
+        assert_eq!(not_built(&without, "qslim-optimal"), None);
+        assert_eq!(not_built(&[Peer { built: true, ..PEERS[0] }], "meshopt"), None);
+    }
+
+    /// The peers this build has are those `PEERS` marks built, and each one's `Variant`
+    /// names are its row, in order.
+    #[test]
+    fn peers_list_the_names_their_modules_give() {
+        let modules: &[(&str, Vec<&str>)] = &[
+            #[cfg(feature = "meshopt")]
+            ("meshopt", crate::meshopt::Variant::ALL.map(|v| v.name()).to_vec()),
+        ];
+        let built: Vec<(&str, Vec<&str>)> =
+            PEERS.iter().filter(|p| p.built).map(|p| (p.feature, p.methods.to_vec())).collect();
+        assert_eq!(modules, built);
     }
 
     /// Vertex 1 is unused and face 2 repeats face 0: both go, the rest is renumbered in
