@@ -2,9 +2,11 @@
 //! simplification to every pose, fit the SCAPE deformation model on the simplified
 //! set, deform to every pose and measure v2f/v2v against the ground truth.
 //!
-//! The peers are features: `meshopt` (on by default) builds meshoptimizer's C++ for its
-//! methods; MeshLab (`meshlab.rs`, pymeshlab in a Python found at run time) and
-//! gltfpack (`gltfpack.rs`, a program on the PATH) are subprocesses named explicitly.
+//! The peers are features of their own, all on by default: `meshopt` builds
+//! meshoptimizer's C++ for its methods; `meshlab` (`meshlab.rs`, pymeshlab in a Python
+//! found at run time) and `gltfpack` (`gltfpack.rs`, a program on the PATH) are
+//! subprocesses, their methods named explicitly. A build without one refuses its methods
+//! by name ([`methods::PEERS`]).
 //!
 //! The story of [`eval`], per dataset of the pipeline file:
 //! 1. run the pipeline's cached stages (`desal run`), so the inputs are validated
@@ -24,8 +26,10 @@
 
 pub mod figures;
 pub mod floor;
+#[cfg(feature = "gltfpack")]
 pub mod gltfpack;
 pub mod measure;
+#[cfg(feature = "meshlab")]
 pub mod meshlab;
 #[cfg(feature = "meshopt")]
 pub mod meshopt;
@@ -66,10 +70,14 @@ pub struct EvalArgs {
     /// The pipeline file (TOML; see pipelines/README.md). Every dataset is evaluated.
     pub pipeline: PathBuf,
     /// Methods, comma-separated: qslim-optimal, saliency-optimal, paper-optimal,
-    /// qslim-subset, saliency-subset, paper-subset, multipose, meshopt,
-    /// meshopt-regularize, meshopt-priority; meshlab and meshlab-saliency (Python with
-    /// pymeshlab: $DESAL_PYTHON or python3); gltfpack and gltfpack-sa (rig datasets;
-    /// $DESAL_GLTFPACK or gltfpack); a bare qslim, saliency or paper means both
+    /// qslim-subset, saliency-subset, paper-subset,
+    #[cfg_attr(feature = "meshopt", doc = "multipose, meshopt, meshopt-regularize, meshopt-priority;")]
+    #[cfg_attr(not(feature = "meshopt"), doc = "multipose;")]
+    #[cfg_attr(feature = "meshlab", doc = "meshlab and meshlab-saliency (Python with pymeshlab:")]
+    #[cfg_attr(feature = "meshlab", doc = "$DESAL_PYTHON or python3);")]
+    #[cfg_attr(feature = "gltfpack", doc = "gltfpack and gltfpack-sa (rig datasets; $DESAL_GLTFPACK")]
+    #[cfg_attr(feature = "gltfpack", doc = "or gltfpack);")]
+    /// a bare qslim, saliency or paper means both
     /// placements; external:NAME=PATH is another tool's simplified template; all = every
     /// built-in method but MeshLab's and gltfpack's.
     #[cfg_attr(feature = "cli", arg(long, value_delimiter = ',', default_value = "all"))]
@@ -304,6 +312,7 @@ fn evaluate_dataset(
     let regions = regions::Regions::new(&poses.template_mesh(), &inputs.labels);
     let baseline = match &args.baseline {
         Some(b) => b.clone(),
+        #[cfg(feature = "gltfpack")]
         None if matches!(model, model::EvalModel::Rig)
             && runs.iter().any(|r| r.method.name() == "gltfpack") =>
         {

@@ -12,8 +12,8 @@
 //! | `multipose-saliency`, `multipose-paper` | the same quadrics, the cost × saliency weight (and × edge length): issue 17's "saliency with multi-pose quadrics", measured worse than `multipose` (EVAL.md); named explicitly, not in `all` | subset |
 //! | `multipose-normalized` | the same quadrics, each collapse ranked by its error per unit area as `desal`'s: measured worse than `desal` in v2v and than `multipose` in v2f (EVAL.md); named explicitly, not in `all` | subset |
 //! | `meshopt`, `meshopt-regularize`, `meshopt-priority` | meshoptimizer in-process (feature `meshopt`, on by default): plain, `Regularize`, the most salient vertices flagged `Priority` (`meshopt.rs`) | subset |
-//! | `meshlab`, `meshlab-saliency` | MeshLab's quadric edge collapse through pymeshlab (`$DESAL_PYTHON` or `python3`): plain, and stage 2's weights as vertex quality (`qualityweight`; `meshlab.rs`); named explicitly, not in `all` | greedy |
-//! | `gltfpack`, `gltfpack-sa` | rig datasets: gltfpack (`$DESAL_GLTFPACK` or `gltfpack`) on the rig file, `-si R -noq` (and `-sa`), its ratio bisected to the vertex target; its own skin is kept (`gltfpack.rs`); named explicitly, not in `all` | greedy (exact: it keeps input vertices) |
+//! | `meshlab`, `meshlab-saliency` | MeshLab's quadric edge collapse through pymeshlab (`$DESAL_PYTHON` or `python3`; feature `meshlab`, on by default): plain, and stage 2's weights as vertex quality (`qualityweight`; `meshlab.rs`); named explicitly, not in `all` | greedy |
+//! | `gltfpack`, `gltfpack-sa` | rig datasets: gltfpack (`$DESAL_GLTFPACK` or `gltfpack`; feature `gltfpack`, on by default) on the rig file, `-si R -noq` (and `-sa`), its ratio bisected to the vertex target; its own skin is kept (`gltfpack.rs`); named explicitly, not in `all` | greedy (exact: it keeps input vertices) |
 //! | `external:NAME=PATH` | a simplified template made by another tool | greedy |
 //!
 //! `optimal` placement moves vertices, so they are mapped back by the paper's greedy
@@ -53,8 +53,10 @@ pub enum Method {
     #[cfg(feature = "meshopt")]
     Meshopt(crate::meshopt::Variant),
     /// MeshLab through pymeshlab, in a Python subprocess.
+    #[cfg(feature = "meshlab")]
     Meshlab(crate::meshlab::Variant),
     /// gltfpack on a rig dataset's file, in a subprocess.
+    #[cfg(feature = "gltfpack")]
     Gltfpack(crate::gltfpack::Variant),
     /// Another tool's simplified template, read from `path`.
     External { name: String, path: PathBuf },
@@ -62,7 +64,16 @@ pub enum Method {
 
 /// Built-in methods that `all` leaves out, because they need more than this binary
 /// (MeshLab needs Python with pymeshlab, gltfpack needs gltfpack and a rig dataset).
-pub const OPTIONAL: &[&str] = &["meshlab", "meshlab-saliency", "gltfpack", "gltfpack-sa"];
+pub const OPTIONAL: &[&str] = &[
+    #[cfg(feature = "meshlab")]
+    "meshlab",
+    #[cfg(feature = "meshlab")]
+    "meshlab-saliency",
+    #[cfg(feature = "gltfpack")]
+    "gltfpack",
+    #[cfg(feature = "gltfpack")]
+    "gltfpack-sa",
+];
 
 /// The methods run when none are named, in table order.
 pub const ALL: &[&str] = &[
@@ -85,6 +96,38 @@ pub const ALL: &[&str] = &[
 /// The reference row of every relative change.
 pub const BASELINE: &str = "qslim-optimal";
 
+/// A peer that is a cargo feature of this crate: the feature, the names of its methods
+/// and whether this build has it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Peer {
+    pub feature: &'static str,
+    pub methods: &'static [&'static str],
+    pub built: bool,
+}
+
+/// Every peer behind a feature, so that a build without one still knows its methods'
+/// names and refuses them saying which feature builds them. The names are those of the
+/// peer module's `Variant::name` (a test checks it for the peers built).
+pub const PEERS: &[Peer] = &[
+    Peer {
+        feature: "meshopt",
+        methods: &["meshopt", "meshopt-regularize", "meshopt-priority"],
+        built: cfg!(feature = "meshopt"),
+    },
+    Peer { feature: "meshlab", methods: &["meshlab", "meshlab-saliency"], built: cfg!(feature = "meshlab") },
+    Peer { feature: "gltfpack", methods: &["gltfpack", "gltfpack-sa"], built: cfg!(feature = "gltfpack") },
+];
+
+/// The error for a method of a peer that `peers` says this build lacks; `None` for every
+/// other name (a method this build runs, or one no peer has).
+fn not_built(peers: &[Peer], text: &str) -> Option<String> {
+    let peer = peers.iter().find(|p| !p.built && p.methods.contains(&text))?;
+    let feature = peer.feature;
+    Some(format!(
+        "{text}: this desal was built without the `{feature}` feature; build with `--features {feature}`"
+    ))
+}
+
 impl Method {
     /// The method's name in tables, file names and `eval.json`.
     pub fn name(&self) -> String {
@@ -97,7 +140,9 @@ impl Method {
             Method::Multipose { cost, .. } => format!("multipose-{}", cost.name()),
             #[cfg(feature = "meshopt")]
             Method::Meshopt(variant) => variant.name().into(),
+            #[cfg(feature = "meshlab")]
             Method::Meshlab(variant) => variant.name().into(),
+            #[cfg(feature = "gltfpack")]
             Method::Gltfpack(variant) => variant.name().into(),
             Method::External { name, .. } => name.clone(),
         }
@@ -109,14 +154,20 @@ impl Method {
             let (name, path) = spec
                 .split_once('=')
                 .with_context(|| format!("'{text}': an external method is written external:NAME=PATH"))?;
+            // A peer's names stay reserved in a build without it, so that a name in
+            // eval.json means the same method whatever the build.
             let valid = !name.is_empty()
                 && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
                 && !ALL.contains(&name)
-                && !OPTIONAL.contains(&name);
+                && !OPTIONAL.contains(&name)
+                && !PEERS.iter().any(|p| p.methods.contains(&name));
             if !valid {
                 bail!("'{text}': NAME must be letters, digits, '-' or '_', and not a built-in method name");
             }
             return Ok(Method::External { name: name.into(), path: PathBuf::from(path) });
+        }
+        if let Some(refusal) = not_built(PEERS, text) {
+            bail!(refusal);
         }
         // desal's own methods, by the names `[simplify] method` gives them.
         if let Ok(own) = text.parse::<simplify::Method>() {
@@ -135,9 +186,11 @@ impl Method {
                 return Ok(Method::Multipose { cost, normalized: false });
             }
         }
+        #[cfg(feature = "meshlab")]
         if let Some(variant) = crate::meshlab::Variant::ALL.into_iter().find(|v| v.name() == text) {
             return Ok(Method::Meshlab(variant));
         }
+        #[cfg(feature = "gltfpack")]
         if let Some(variant) = crate::gltfpack::Variant::ALL.into_iter().find(|v| v.name() == text) {
             return Ok(Method::Gltfpack(variant));
         }
@@ -183,7 +236,9 @@ impl Method {
             Method::Desal | Method::DesalRefit | Method::Multipose { .. } => "subset",
             #[cfg(feature = "meshopt")]
             Method::Meshopt(_) => "subset",
+            #[cfg(feature = "meshlab")]
             Method::Meshlab(_) => "optimal",
+            #[cfg(feature = "gltfpack")]
             Method::Gltfpack(_) => "subset",
             Method::External { .. } => "external",
         }
@@ -256,6 +311,8 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
     let name = method.name();
     let started = Instant::now();
     let template = inputs.poses.template_mesh();
+    // Only a tool that brings its own skin sets it: gltfpack.
+    #[cfg_attr(not(feature = "gltfpack"), expect(unused_mut))]
     let mut skin = None;
     let (body, stop, note) = match method {
         Method::Quadric { cost, placement } => {
@@ -326,6 +383,7 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
             };
             (body, Some(stop), note)
         }
+        #[cfg(feature = "meshlab")]
         Method::Meshlab(variant) => {
             let Target::Vertices(n) = target else {
                 bail!("{name}: MeshLab is compared at a vertex count; give --target-vertices");
@@ -350,6 +408,7 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
             };
             (simplify::external(&mesh), Some(stop), note)
         }
+        #[cfg(feature = "gltfpack")]
         Method::Gltfpack(variant) => {
             let Target::Vertices(n) = target else {
                 bail!("{name}: gltfpack is compared at a vertex count; give --target-vertices");
@@ -463,6 +522,57 @@ mod tests {
             assert!(Method::parse("external:meshopt=x.ply").is_err(), "shadows a built-in");
             assert_eq!(Method::parse("meshopt-priority").unwrap().placement(), "subset");
         }
+    }
+
+    /// In every build, each peer's method parses when its feature is built and is
+    /// otherwise refused with a message naming the method and the feature; either way
+    /// its name cannot be taken by an external mesh.
+    #[test]
+    fn a_peer_not_built_is_refused_by_name_with_its_feature() {
+        for peer in PEERS {
+            for &name in peer.methods {
+                match Method::parse(name) {
+                    Ok(method) => {
+                        assert!(peer.built, "{name} parsed without the `{}` feature", peer.feature);
+                        assert_eq!(method.name(), name);
+                    }
+                    Err(error) => {
+                        assert!(!peer.built, "{name}: {error}");
+                        let message = error.to_string();
+                        assert!(message.starts_with(&format!("{name}: ")), "{message}");
+                        assert!(message.contains(&format!("--features {}", peer.feature)), "{message}");
+                        assert!(!message.contains("unknown method"), "{message}");
+                    }
+                }
+                assert!(Method::parse(&format!("external:{name}=x.ply")).is_err(), "{name} is reserved");
+            }
+        }
+        // The rule itself, on a table where meshopt is missing, whatever this build has.
+        let without = [Peer { built: false, ..PEERS[0] }];
+        let refusal = not_built(&without, "meshopt-priority").unwrap();
+        assert_eq!(
+            refusal,
+            "meshopt-priority: this desal was built without the `meshopt` feature; build with `--features meshopt`"
+        );
+        assert_eq!(not_built(&without, "qslim-optimal"), None);
+        assert_eq!(not_built(&[Peer { built: true, ..PEERS[0] }], "meshopt"), None);
+    }
+
+    /// The peers this build has are those `PEERS` marks built, and each one's `Variant`
+    /// names are its row, in order.
+    #[test]
+    fn peers_list_the_names_their_modules_give() {
+        let modules: &[(&str, Vec<&str>)] = &[
+            #[cfg(feature = "meshopt")]
+            ("meshopt", crate::meshopt::Variant::ALL.map(|v| v.name()).to_vec()),
+            #[cfg(feature = "meshlab")]
+            ("meshlab", crate::meshlab::Variant::ALL.map(|v| v.name()).to_vec()),
+            #[cfg(feature = "gltfpack")]
+            ("gltfpack", crate::gltfpack::Variant::ALL.map(|v| v.name()).to_vec()),
+        ];
+        let built: Vec<(&str, Vec<&str>)> =
+            PEERS.iter().filter(|p| p.built).map(|p| (p.feature, p.methods.to_vec())).collect();
+        assert_eq!(modules, built);
     }
 
     /// Vertex 1 is unused and face 2 repeats face 0: both go, the rest is renumbered in
