@@ -536,14 +536,24 @@ fn parse_descr(descr: &str) -> Result<(Element, bool), String> {
 /// is allocated; Fortran-order data is returned in C order.
 pub fn decode_npy_any(bytes: &[u8]) -> Result<AnyArray, String> {
     let header = parse_npy_header(bytes)?;
-    let (element, big) = parse_descr(&header.descr)?;
-    let data = &bytes[header.data_offset..];
-    let item = element.item_size().ok_or_else(|| format!("dtype '{}' overflows", header.descr))?;
-    if header.count.checked_mul(item) != Some(data.len()) {
+    decode_array_data(&header.descr, header.shape, header.fortran_order, &bytes[header.data_offset..])
+}
+
+/// An array from its raw `data` as numpy lays it out: `descr` as in an npy header
+/// (`'<f8'`, `'|b1'`, `'<U7'`), `shape`, and the order. `data` must hold exactly the
+/// values the shape and dtype say (what a pickled ndarray's state carries, too).
+pub fn decode_array_data(
+    descr: &str,
+    shape: Vec<usize>,
+    fortran_order: bool,
+    data: &[u8],
+) -> Result<AnyArray, String> {
+    let count = shape.iter().try_fold(1usize, |a, &d| a.checked_mul(d)).ok_or("shape overflows")?;
+    let (element, big) = parse_descr(descr)?;
+    let item = element.item_size().ok_or_else(|| format!("dtype '{descr}' overflows"))?;
+    if count.checked_mul(item) != Some(data.len()) {
         return Err(format!(
-            "shape {:?} needs {} values of {item} bytes, the entry holds {} bytes",
-            header.shape,
-            header.count,
+            "shape {shape:?} needs {count} values of {item} bytes, the entry holds {} bytes",
             data.len()
         ));
     }
@@ -584,8 +594,8 @@ pub fn decode_npy_any(bytes: &[u8]) -> Result<AnyArray, String> {
                 .collect(),
         ),
     };
-    let values = if header.fortran_order { fortran_to_c(values, &header.shape) } else { values };
-    Ok(AnyArray { shape: header.shape, data: values })
+    let values = if fortran_order { fortran_to_c(values, &shape) } else { values };
+    Ok(AnyArray { shape, data: values })
 }
 
 /// One fixed-width UTF-32 string without its trailing NULs.
