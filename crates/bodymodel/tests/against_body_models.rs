@@ -1,0 +1,103 @@
+//! desal's evaluation against body-models' (NumPy backend) on the CC0 fixture, to 1e-6 m.
+//!
+//! `tests/data/body_models_expected.npz` was written by `tests/against_body_models.py`
+//! (body-models 0.26.2): parameters, body-models' vertices at every 16th vertex and its
+//! posed joints, and the SHA-256 of the fixture it loaded. This test builds the same
+//! fixture from `data-samples/source` (`desal_sample::smpl_layout`), checks the hash, so
+//! the expected values belong to these bytes, then evaluates. After a change to the
+//! fixture's generator, run the script again.
+
+use std::path::Path;
+
+use desal_bodymodel::{BodyModel, Params};
+use desal_io::npz::{AnyArray, AnyData, decode_npy_any, read_npz_entries_from};
+use desal_mesh::Vec3;
+use desal_sample::SourceAssets;
+use desal_sample::smpl_layout::{SmplLayoutModel, smpl_layout_model};
+use sha2::{Digest, Sha256};
+
+const TOLERANCE: f64 = 1e-6;
+
+fn fixture() -> SmplLayoutModel {
+    let assets = SourceAssets::load(&desal_sample::source::repository_source_dir()).unwrap();
+    smpl_layout_model(&assets).unwrap()
+}
+
+fn expected() -> Vec<(String, AnyArray)> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/body_models_expected.npz");
+    let entries = read_npz_entries_from(&path, &std::fs::read(&path).unwrap()).unwrap();
+    entries.into_iter().map(|e| (e.name, decode_npy_any(&e.npy).unwrap())).collect()
+}
+
+fn get<'a>(arrays: &'a [(String, AnyArray)], key: &str) -> &'a AnyArray {
+    &arrays.iter().find(|(k, _)| k == key).unwrap_or_else(|| panic!("no '{key}'")).1
+}
+
+fn f64s(a: &AnyArray) -> Vec<f64> {
+    a.data.to_f64().unwrap()
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// The model's vertices and joints match body-models' for six parameter sets (zero pose,
+/// a shape, two poses, two of both with a pelvis turn and a translation).
+#[test]
+fn evaluation_matches_body_models() {
+    let npz = fixture().npz().unwrap();
+    let expected = expected();
+    let AnyData::Unicode(digest) = &get(&expected, "fixture_sha256").data else { panic!("no digest") };
+    assert_eq!(
+        hex(&Sha256::digest(&npz)),
+        digest[0],
+        "the fixture's generator changed since tests/against_body_models.py ran: run it again"
+    );
+    let model = BodyModel::from_npz_bytes(Path::new("model.npz"), &npz).unwrap();
+    let (betas, pose, translation) =
+        (f64s(get(&expected, "betas")), f64s(get(&expected, "pose")), f64s(get(&expected, "translation")));
+    let index = get(&expected, "vertex_index").data.to_i64().unwrap();
+    let (vertices, joints) = (f64s(get(&expected, "vertices")), f64s(get(&expected, "joints")));
+    let sets = get(&expected, "betas").shape[0];
+    let (mut worst_vertex, mut worst_joint) = (0.0f64, 0.0f64);
+    for s in 0..sets {
+        let pose: Vec<Vec3> =
+            pose[s * 72..(s + 1) * 72].chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+        let t = &translation[s * 3..s * 3 + 3];
+        let params = Params {
+            betas: &betas[s * 10..(s + 1) * 10],
+            expression: &[],
+            pose: &pose,
+            translation: Vec3::new(t[0], t[1], t[2]),
+        };
+        let posed = model.evaluate(&params).unwrap();
+        for (k, &v) in index.iter().enumerate() {
+            let at = (s * index.len() + k) * 3;
+            let theirs = Vec3::new(vertices[at], vertices[at + 1], vertices[at + 2]);
+            worst_vertex = worst_vertex.max((posed.vertices[v as usize] - theirs).abs().max());
+        }
+        for (j, ours) in posed.joints.iter().enumerate() {
+            let at = (s * 24 + j) * 3;
+            worst_joint =
+                worst_joint.max((ours - Vec3::new(joints[at], joints[at + 1], joints[at + 2])).abs().max());
+        }
+    }
+    println!(
+        "against body-models: {sets} parameter sets, max |diff| vertices {worst_vertex:.2e} m, joints {worst_joint:.2e} m"
+    );
+    assert!(worst_vertex < TOLERANCE && worst_joint < TOLERANCE, "{worst_vertex:e} {worst_joint:e}");
+}
+
+/// The fixture's pickle (Python 2 chumpy layout, CSC regressor) reads into the same model
+/// as its npz; only the kept extra entries differ in form.
+#[test]
+fn pickle_and_npz_read_alike() {
+    let fixture = fixture();
+    let from_npz = BodyModel::from_npz_bytes(Path::new("model.npz"), &fixture.npz().unwrap()).unwrap();
+    let from_pkl = BodyModel::from_pkl_bytes(Path::new("model.pkl"), &fixture.pkl()).unwrap();
+    let strip = |m: &BodyModel| BodyModel { extras: Vec::new(), ..m.clone() };
+    assert_eq!(strip(&from_npz), strip(&from_pkl));
+    let names = |m: &BodyModel| m.extras.iter().map(|(k, _)| k.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&from_npz), ["J", "bs_style", "bs_type"]);
+    assert_eq!(names(&from_pkl), names(&from_npz));
+}
