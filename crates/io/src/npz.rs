@@ -1044,7 +1044,7 @@ mod tests {
         assert!(names.contains(&"map1") && names.contains(&"orig1") && names.contains(&"U0_shape"));
     }
 
-    fn any_entry<'a>(entries: &'a [NpzEntry], name: &str) -> AnyArray {
+    fn any_entry(entries: &[NpzEntry], name: &str) -> AnyArray {
         let entry = entries.iter().find(|e| e.name == name).unwrap_or_else(|| panic!("no entry {name}"));
         decode_npy_any(&entry.npy).unwrap()
     }

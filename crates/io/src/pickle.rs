@@ -771,7 +771,7 @@ fn long_node(bytes: Vec<u8>) -> Node {
 }
 
 fn pairs(items: Vec<Id>) -> Result<Vec<(Id, Id)>, String> {
-    if items.len() % 2 != 0 {
+    if !items.len().is_multiple_of(2) {
         return Err("a dict needs key/value pairs".into());
     }
     Ok(items.chunks_exact(2).map(|c| (c[0], c[1])).collect())
@@ -851,7 +851,7 @@ mod tests {
         }
     }
 
-    fn array<'a>(value: Option<&'a PyValue>) -> &'a AnyArray {
+    fn array(value: Option<&PyValue>) -> &AnyArray {
         match value {
             Some(PyValue::Array(a)) => a,
             other => panic!("not an array: {other:?}"),
