@@ -517,9 +517,11 @@ fn parse_descr(descr: &str) -> Result<(Element, bool), String> {
     if rest == "O" {
         return Err(format!("dtype '{descr}' is an object array (pickled); it is kept raw, not read"));
     }
-    let (kind, size) = rest.split_at(rest.len().min(1));
-    let size: usize = size.parse().map_err(|_| unsupported())?;
-    let element = match (kind, size) {
+    // By character, not byte: a descr is text from the file, any UTF-8.
+    let mut kind_and_size = rest.chars();
+    let kind = kind_and_size.next().map(String::from).unwrap_or_default();
+    let size: usize = kind_and_size.as_str().parse().map_err(|_| unsupported())?;
+    let element = match (kind.as_str(), size) {
         ("b", 1) => Element::Bool,
         ("i", 1 | 2 | 4 | 8) => Element::Int { size, signed: true },
         ("u", 1 | 2 | 4 | 8) => Element::Int { size, signed: false },
@@ -1124,6 +1126,9 @@ mod tests {
                 "{err}"
             );
         }
+        // Found by desal-fuzz's pickle target: a non-ASCII descr once panicked (split at
+        // byte 1, inside a character).
+        assert!(decode_npy_any(&forged("ÿÿ", &[3])).unwrap_err().contains("not supported"));
         let good = forged("<f4", &[3]);
         for len in 0..good.len() {
             assert!(decode_npy_any(&good[..len]).is_err(), "truncated to {len} bytes");

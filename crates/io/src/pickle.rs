@@ -328,6 +328,9 @@ impl Machine<'_> {
                 0x85..=0x87 => {
                     let n = (op - 0x84) as usize;
                     let at = self.stack.len().checked_sub(n).ok_or_else(|| fail("stack underflow".into()))?;
+                    if self.marks.last().is_some_and(|&m| m > at) {
+                        return Err(fail("a tuple across a MARK".into()));
+                    }
                     let items = self.stack.split_off(at);
                     self.push(Node::Tuple(items));
                 }
@@ -489,6 +492,9 @@ impl Machine<'_> {
 
     fn pop_mark(&mut self) -> Result<Vec<Id>, String> {
         let mark = self.marks.pop().ok_or("no MARK on the stack")?;
+        if mark > self.stack.len() {
+            return Err("the values after a MARK were consumed".into());
+        }
         Ok(self.stack.split_off(mark))
     }
 
@@ -929,6 +935,14 @@ mod tests {
             bad[at] ^= 0x5a;
             let _ = unpickle(&bad);
         }
+    }
+
+    /// Found by desal-fuzz: TUPLE2 taking a value from below a MARK, then the MARK's
+    /// pop, once split the stack past its end.
+    #[test]
+    fn a_tuple_across_a_mark_is_refused() {
+        let err = unpickle(b"\x80\x02K\x01(K\x02\x86t.").unwrap_err();
+        assert!(err.contains("across a MARK"), "{err}");
     }
 
     /// A list appended to itself, and a chain of lists each holding the previous one
