@@ -10,7 +10,7 @@ Without `--fixture`, builds the fixture first (`cargo run --release -p desal-sam
    that both give the same model and that `J_regressor @ v_template` is the rig's `J`;
 2. evaluates a few parameter sets (the zero pose, a shape alone, poses alone, both with a
    pelvis rotation and a translation), inputs in float64;
-3. writes `crates/bodymodel/tests/data/body_models_expected.npz`: the parameters, the
+3. writes `crates/bodymodel/tests/data/body_models_expected.npz` (or `--out`): the parameters, the
    vertices at every 16th vertex index, the posed joints, and the fixture's SHA-256, which
    `tests/against_body_models.rs` checks against desal's evaluation to 1e-6.
 """
@@ -70,7 +70,9 @@ def evaluate(model: SMPL, p: dict) -> tuple[np.ndarray, np.ndarray]:
 def main() -> int:
     parser = argparse.ArgumentParser()
     parser.add_argument("--fixture", type=Path, help="folder with model.npz and model.pkl (built when absent)")
+    parser.add_argument("--out", type=Path, default=OUT, help=f"where to write the expected values (default {OUT.relative_to(ROOT)})")
     args = parser.parse_args()
+    out = args.out
     with tempfile.TemporaryDirectory() as tmp:
         folder = args.fixture or Path(tmp)
         if args.fixture is None:
@@ -104,7 +106,7 @@ def main() -> int:
         index = np.arange(0, vertices.shape[1], STRIDE)
         digest = hashlib.sha256(npz_path.read_bytes()).hexdigest()
         np.savez(
-            OUT,
+            out,
             betas=np.stack([p["betas"] for p in sets]),
             pose=np.stack([p["pose"] for p in sets]),
             translation=np.stack([p["translation"] for p in sets]),
@@ -113,7 +115,7 @@ def main() -> int:
             joints=np.stack(joints),
             fixture_sha256=np.array(digest),
         )
-        print(f"wrote {OUT.relative_to(ROOT)} ({OUT.stat().st_size} bytes); fixture sha256 {digest}")
+        print(f"wrote {out} ({out.stat().st_size} bytes); fixture sha256 {digest}")
     return 0
 
 

@@ -24,8 +24,11 @@ fn fixture() -> SmplLayoutModel {
 }
 
 fn expected() -> Vec<(String, AnyArray)> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/body_models_expected.npz");
-    let entries = read_npz_entries_from(&path, &std::fs::read(&path).unwrap()).unwrap();
+    read_expected(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/body_models_expected.npz"))
+}
+
+fn read_expected(path: &Path) -> Vec<(String, AnyArray)> {
+    let entries = read_npz_entries_from(path, &std::fs::read(path).unwrap()).unwrap();
     entries.into_iter().map(|e| (e.name, decode_npy_any(&e.npy).unwrap())).collect()
 }
 
@@ -45,20 +48,49 @@ fn hex(bytes: &[u8]) -> String {
 /// a shape, two poses, two of both with a pelvis turn and a translation).
 #[test]
 fn evaluation_matches_body_models() {
-    let npz = fixture().npz().unwrap();
-    let expected = expected();
-    let AnyData::Unicode(digest) = &get(&expected, "fixture_sha256").data else { panic!("no digest") };
+    compare(&fixture().npz().unwrap(), &expected());
+}
+
+/// The same comparison with body-models run now, when `DESAL_BODY_MODELS_PYTHON` names a
+/// Python that has it (`pip install body-models==0.26.2`): the fixture is written to a
+/// temporary folder and the script evaluates it there.
+#[test]
+fn evaluation_matches_body_models_live() {
+    let Some(python) = std::env::var_os("DESAL_BODY_MODELS_PYTHON") else {
+        println!("skipped: DESAL_BODY_MODELS_PYTHON is not set (a Python with body-models 0.26.2)");
+        return;
+    };
+    let fixture = fixture();
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("model.npz"), fixture.npz().unwrap()).unwrap();
+    std::fs::write(dir.path().join("model.pkl"), fixture.pkl()).unwrap();
+    let out = dir.path().join("expected.npz");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/against_body_models.py");
+    let status = std::process::Command::new(python)
+        .arg(script)
+        .arg("--fixture")
+        .arg(dir.path())
+        .arg("--out")
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success(), "against_body_models.py failed: {status}");
+    compare(&fixture.npz().unwrap(), &read_expected(&out));
+}
+
+fn compare(npz: &[u8], expected: &[(String, AnyArray)]) {
+    let AnyData::Unicode(digest) = &get(expected, "fixture_sha256").data else { panic!("no digest") };
     assert_eq!(
-        hex(&Sha256::digest(&npz)),
+        hex(&Sha256::digest(npz)),
         digest[0],
         "the fixture's generator changed since tests/against_body_models.py ran: run it again"
     );
-    let model = BodyModel::from_npz_bytes(Path::new("model.npz"), &npz).unwrap();
+    let model = BodyModel::from_npz_bytes(Path::new("model.npz"), npz).unwrap();
     let (betas, pose, translation) =
-        (f64s(get(&expected, "betas")), f64s(get(&expected, "pose")), f64s(get(&expected, "translation")));
-    let index = get(&expected, "vertex_index").data.to_i64().unwrap();
-    let (vertices, joints) = (f64s(get(&expected, "vertices")), f64s(get(&expected, "joints")));
-    let sets = get(&expected, "betas").shape[0];
+        (f64s(get(expected, "betas")), f64s(get(expected, "pose")), f64s(get(expected, "translation")));
+    let index = get(expected, "vertex_index").data.to_i64().unwrap();
+    let (vertices, joints) = (f64s(get(expected, "vertices")), f64s(get(expected, "joints")));
+    let sets = get(expected, "betas").shape[0];
     let (mut worst_vertex, mut worst_joint) = (0.0f64, 0.0f64);
     for s in 0..sets {
         let pose: Vec<Vec3> =
