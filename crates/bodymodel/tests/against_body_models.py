@@ -13,6 +13,12 @@ Without `--fixture`, builds the fixture first (`cargo run --release -p desal-sam
 3. writes `crates/bodymodel/tests/data/body_models_expected.npz` (or `--out`): the parameters, the
    vertices at every 16th vertex index, the posed joints, and the fixture's SHA-256, which
    `tests/against_body_models.rs` checks against desal's evaluation to 1e-6.
+
+With `--flame`, it also writes a tiny random model in FLAME's layout (5 joints, 300 shape
++ 10 expression columns in `shapedirs`, dense random `posedirs`; numbers drawn here,
+seeded) as `tests/data/flame_random.npz`, and body-models' `FLAME` evaluation of it as
+`tests/data/flame_random_expected.npz`: the expression split and a dense corrective basis,
+which the CC0 SMPL fixture does not exercise.
 """
 
 import argparse
@@ -67,12 +73,66 @@ def evaluate(model: SMPL, p: dict) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(vertices, dtype=np.float64), np.asarray(joints, dtype=np.float64)
 
 
+def write_flame(folder: Path) -> None:
+    from body_models.flame.numpy import FLAME
+
+    rng = np.random.default_rng(5)
+    v, j = 12, 5
+    weights = rng.uniform(0.0, 1.0, size=(v, j))
+    regressor = rng.uniform(0.0, 1.0, size=(j, v))
+    model = dict(
+        v_template=rng.uniform(-0.1, 0.1, size=(v, 3)).astype(np.float32),
+        f=np.array([[0, 1, 2], [2, 3, 4], [5, 6, 7], [8, 9, 10], [9, 10, 11]], dtype=np.int32),
+        shapedirs=rng.normal(scale=0.01, size=(v, 3, 310)).astype(np.float32),
+        posedirs=rng.normal(scale=0.01, size=(v, 3, 9 * (j - 1))).astype(np.float32),
+        weights=(weights / weights.sum(axis=1, keepdims=True)).astype(np.float32),
+        J_regressor=(regressor / regressor.sum(axis=1, keepdims=True)).astype(np.float32),
+        kintree_table=np.array([[4294967295, 0, 1, 1, 1], [0, 1, 2, 3, 4]], dtype=np.int64),
+    )
+    np.savez(folder / "flame_random.npz", **model)
+    flame = FLAME(model_path=folder / "flame_random.npz")
+    sets = []
+    for _ in range(3):
+        sets.append(
+            dict(
+                betas=rng.normal(size=20),
+                expression=rng.normal(size=10),
+                pose=rng.normal(scale=0.3, size=(5, 3)),
+                translation=rng.normal(scale=0.1, size=3),
+            )
+        )
+    vertices, joints = [], []
+    for p in sets:
+        args = dict(
+            head_pose=p["pose"][1:],
+            head_rotation=p["pose"][0],
+            shape=p["betas"],
+            expression=p["expression"],
+            global_translation=p["translation"],
+        )
+        vertices.append(np.asarray(flame.forward_vertices(**args), dtype=np.float64))
+        joints.append(np.asarray(flame.forward_skeleton(**args)[:, :3, 3], dtype=np.float64))
+    np.savez(
+        folder / "flame_random_expected.npz",
+        betas=np.stack([p["betas"] for p in sets]),
+        expression=np.stack([p["expression"] for p in sets]),
+        pose=np.stack([p["pose"] for p in sets]),
+        translation=np.stack([p["translation"] for p in sets]),
+        vertices=np.stack(vertices),
+        joints=np.stack(joints),
+    )
+    print(f"wrote flame_random.npz and flame_random_expected.npz into {folder}")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser()
     parser.add_argument("--fixture", type=Path, help="folder with model.npz and model.pkl (built when absent)")
     parser.add_argument("--out", type=Path, default=OUT, help=f"where to write the expected values (default {OUT.relative_to(ROOT)})")
+    parser.add_argument("--flame", action="store_true", help="also write the random FLAME-layout model and its values")
     args = parser.parse_args()
     out = args.out
+    if args.flame:
+        write_flame(out.parent)
     with tempfile.TemporaryDirectory() as tmp:
         folder = args.fixture or Path(tmp)
         if args.fixture is None:

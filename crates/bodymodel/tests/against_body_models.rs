@@ -72,10 +72,52 @@ fn evaluation_matches_body_models_live() {
         .arg(dir.path())
         .arg("--out")
         .arg(&out)
+        .arg("--flame")
         .status()
         .unwrap();
     assert!(status.success(), "against_body_models.py failed: {status}");
     compare(&fixture.npz().unwrap(), &read_expected(&out));
+    compare_flame(&dir.path().join("flame_random.npz"), &dir.path().join("flame_random_expected.npz"));
+}
+
+/// A random model in FLAME's layout (written by the script with `--flame`): `shapedirs`
+/// 300 shape + 10 expression columns, dense random correctives, FLAME's tree; 20 betas and
+/// 10 expression coefficients per set.
+#[test]
+fn flame_layout_matches_body_models() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    compare_flame(&data.join("flame_random.npz"), &data.join("flame_random_expected.npz"));
+}
+
+fn compare_flame(model: &Path, expected: &Path) {
+    let model = BodyModel::read(model).unwrap();
+    assert_eq!(
+        (model.kind, model.shape_count, model.expression_count),
+        (desal_bodymodel::ModelKind::Flame, 300, 10)
+    );
+    let expected = read_expected(expected);
+    let (betas, expression) = (f64s(get(&expected, "betas")), f64s(get(&expected, "expression")));
+    let (pose, translation) = (f64s(get(&expected, "pose")), f64s(get(&expected, "translation")));
+    let (vertices, joints) = (f64s(get(&expected, "vertices")), f64s(get(&expected, "joints")));
+    let (v, j) = (model.vertex_count(), model.joint_count());
+    let mut worst = 0.0f64;
+    for s in 0..get(&expected, "betas").shape[0] {
+        let pose: Vec<Vec3> =
+            pose[s * 3 * j..(s + 1) * 3 * j].chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
+        let t = &translation[s * 3..s * 3 + 3];
+        let params = Params {
+            betas: &betas[s * 20..(s + 1) * 20],
+            expression: &expression[s * 10..(s + 1) * 10],
+            pose: &pose,
+            translation: Vec3::new(t[0], t[1], t[2]),
+        };
+        let posed = model.evaluate(&params).unwrap();
+        let ours = posed.vertices.iter().chain(&posed.joints).flat_map(|p| p.iter().copied());
+        let theirs = vertices[s * v * 3..(s + 1) * v * 3].iter().chain(&joints[s * j * 3..(s + 1) * j * 3]);
+        worst = ours.zip(theirs).map(|(a, b)| (a - b).abs()).fold(worst, f64::max);
+    }
+    println!("FLAME layout against body-models: max |diff| {worst:.2e}");
+    assert!(worst < TOLERANCE, "{worst:e}");
 }
 
 fn compare(npz: &[u8], expected: &[(String, AnyArray)]) {
