@@ -9,12 +9,14 @@
 //! Limits: no zip64, so under 4 GiB and 65 535 arrays (a hierarchy of SCAPE is ~2 MB).
 //!
 //! The reader accepts what the writer writes, and `np.savez` files of the same dtypes:
-//! stored entries, npy 1.0 or 2.0 headers, C order. It refuses anything else with a
+//! stored (or deflated) entries, npy 1.0 or 2.0 headers, C order. It refuses anything else with a
 //! message naming the entry. Every write is atomic ([`crate::atomic`]).
 //!
 //! A second, wider reader serves files desal does not write, such as parametric body
 //! models (SMPL's `model.npz`): [`decode_npz_entries`] splits an archive into its entries'
-//! raw `.npy` bytes (CRC checked, nothing else parsed), so an entry can be copied
+//! raw `.npy` bytes (CRC checked, nothing else parsed; deflated entries of
+//! `np.savez_compressed` inflated through `miniz_oxide`, at most 1032 times their stored
+//! size, deflate's limit), so an entry can be copied
 //! unchanged, and [`decode_npy_any`] parses one of them: booleans, (un)signed integers of
 //! 1 to 8 bytes, float32/float64, either byte order, fixed-width unicode (`<U`) and bytes
 //! (`S`) strings, C or Fortran order (returned in C order). Object arrays (pickled) are
@@ -223,16 +225,16 @@ pub fn decode_npz_entries(bytes: &[u8]) -> Result<Vec<NpzEntry>, String> {
         let method = read_u16(bytes, at + 10)?;
         let crc = read_u32(bytes, at + 16)?;
         let size = read_u32(bytes, at + 20)? as usize;
-        let stored_size = read_u32(bytes, at + 24)? as usize;
+        let uncompressed = read_u32(bytes, at + 24)? as usize;
         let name_len = read_u16(bytes, at + 28)? as usize;
         let extra_len = read_u16(bytes, at + 30)? as usize;
         let comment_len = read_u16(bytes, at + 32)? as usize;
         let local = read_u32(bytes, at + 42)? as usize;
         let name = slice(bytes, at + CENTRAL_HEADER_LEN, name_len)?;
         let name = std::str::from_utf8(name).map_err(|_| "an entry name is not UTF-8".to_owned())?.to_owned();
-        if method != 0 || size != stored_size {
+        if !(method == 0 && size == uncompressed || method == DEFLATED) {
             return Err(format!(
-                "entry '{name}' is compressed (method {method}); only stored entries are read (np.savez, not savez_compressed)"
+                "entry '{name}' uses compression method {method}; only stored and deflated entries are read (np.savez, np.savez_compressed)"
             ));
         }
         if read_u32(bytes, local)? != LOCAL_SIGNATURE {
@@ -242,12 +244,41 @@ pub fn decode_npz_entries(bytes: &[u8]) -> Result<Vec<NpzEntry>, String> {
         let local_extra = read_u16(bytes, local + 28)? as usize;
         let payload = slice(bytes, local + LOCAL_HEADER_LEN + local_name + local_extra, size)
             .map_err(|e| format!("entry '{name}': {e}"))?;
-        if crc32fast::hash(payload) != crc {
+        let payload = if method == DEFLATED {
+            inflate(payload, uncompressed).map_err(|e| format!("entry '{name}': {e}"))?
+        } else {
+            payload.to_vec()
+        };
+        if crc32fast::hash(&payload) != crc {
             return Err(format!("entry '{name}': CRC-32 mismatch, the file is corrupt"));
         }
         let stem = name.strip_suffix(".npy").unwrap_or(&name).to_owned();
-        out.push(NpzEntry { name: stem, npy: payload.to_vec() });
+        out.push(NpzEntry { name: stem, npy: payload });
         at += CENTRAL_HEADER_LEN + name_len + extra_len + comment_len;
+    }
+    Ok(out)
+}
+
+/// Zip's compression method 8, what `np.savez_compressed` writes.
+const DEFLATED: u16 = 8;
+/// Deflate cannot expand its input more than about 1032 times (258-byte matches coded in
+/// 2 bits); a larger announced size is a lie, refused before anything is allocated.
+const MAX_INFLATE_RATIO: usize = 1032;
+
+/// A deflated entry's `uncompressed` bytes: announced sizes beyond deflate's ratio are
+/// refused, and inflation stops at the announced size, so the output is bounded by
+/// 1032 × the entry's stored bytes.
+fn inflate(deflated: &[u8], uncompressed: usize) -> Result<Vec<u8>, String> {
+    if uncompressed > deflated.len().saturating_mul(MAX_INFLATE_RATIO).saturating_add(64) {
+        return Err(format!(
+            "announces {uncompressed} bytes from {} deflated ones, more than deflate can expand",
+            deflated.len()
+        ));
+    }
+    let out = miniz_oxide::inflate::decompress_to_vec_with_limit(deflated, uncompressed)
+        .map_err(|e| format!("the deflated data is corrupt or longer than announced ({:?})", e.status))?;
+    if out.len() != uncompressed {
+        return Err(format!("inflates to {} bytes, not the {uncompressed} announced", out.len()));
     }
     Ok(out)
 }
@@ -1082,6 +1113,33 @@ mod tests {
         assert!(decode_npy_any(&object.npy).unwrap_err().contains("object array"));
         // The typed reader of hierarchy.npz still refuses what it does not know.
         assert!(decode_npz(bytes).unwrap_err().contains("dtype"));
+    }
+
+    /// `np.savez_compressed` (deflated entries) reads like `np.savez`; a forged
+    /// uncompressed size past deflate's ratio is refused before inflating.
+    #[test]
+    fn numpy_compressed() {
+        let bytes = include_bytes!("../tests/fixtures/numpy_compressed.npz");
+        let entries = decode_npz_entries(bytes).unwrap();
+        assert_eq!(any_entry(&entries, "f32").data, AnyData::F32((0..1000).map(|i| i as f32).collect()));
+        assert_eq!(any_entry(&entries, "zeros").data, AnyData::F64(vec![0.0; 4096]));
+        assert_eq!(any_entry(&entries, "flag").data, AnyData::Bool(vec![true]));
+        let mut forged = bytes.to_vec();
+        let central =
+            u32::from_le_bytes(forged[forged.len() - 6..forged.len() - 2].try_into().unwrap()) as usize;
+        forged[central + 24..central + 28].copy_from_slice(&u32::MAX.to_le_bytes());
+        let err = decode_npz_entries(&forged).unwrap_err();
+        assert!(err.contains("more than deflate can expand"), "{err}");
+        for len in 0..bytes.len() {
+            assert!(decode_npz_entries(&bytes[..len]).is_err(), "truncated to {len} bytes");
+        }
+        // Every single-byte change of the deflated file is refused or read, never a panic.
+        for at in 0..bytes.len() {
+            let mut bad = bytes.to_vec();
+            bad[at] ^= 0xa5;
+            let _ = decode_npz_entries(&bad)
+                .map(|entries| entries.iter().map(|e| decode_npy_any(&e.npy)).count());
+        }
     }
 
     /// Every dtype round-trips through encode_npy_any / decode_npy_any, and copied raw
