@@ -57,8 +57,9 @@
 //!
 //! # Part labels
 //!
-//! [`labels_from_weights`]: dominant joint per vertex, merged along the tree to about
-//! `target_parts` parts (16 gives parts like SCAPE's); the rule is in [`labels`].
+//! [`labels_from_weights`]: dominant joint per vertex, merged along the tree — smallest
+//! surface first, mirror pairs together — to at most `target_parts` parts (16 gives
+//! anatomical parts close to SCAPE's); the rule is in [`labels`].
 //!
 //! **Invariant:** no paths beyond the one file [`BodyModel::read`] is given; no pipeline,
 //! cache or progress bar. Models are f64 throughout.

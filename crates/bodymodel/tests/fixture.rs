@@ -36,15 +36,40 @@ fn fixture_reads_as_smpl() {
     assert!(worst < 1e-6, "{worst}");
 }
 
-/// 16 parts, each holding vertices, the same on every call.
+/// 16 asked: 15 anatomical parts (the hands pair merges last), symmetric, each holding
+/// vertices, the same on every call.
 #[test]
-fn fixture_labels_make_sixteen_parts() {
+fn fixture_labels_make_body_parts() {
     let model = fixture();
     let labels = labels_from_weights(&model, 16);
-    assert_eq!(labels.part_count(), 16);
-    let mut sizes = vec![0; 16];
+    let names: Vec<&str> = labels.names.iter().map(String::as_str).collect();
+    assert_eq!(
+        names,
+        [
+            "pelvis",
+            "left_hip",
+            "right_hip",
+            "spine1",
+            "left_knee",
+            "right_knee",
+            "spine2",
+            "left_ankle",
+            "right_ankle",
+            "spine3",
+            "head",
+            "left_shoulder",
+            "right_shoulder",
+            "left_elbow",
+            "right_elbow"
+        ]
+    );
+    let mut sizes = vec![0usize; names.len()];
     labels.labels.iter().for_each(|&p| sizes[p as usize] += 1);
-    assert!(sizes.iter().all(|&n| n > 0), "{sizes:?} {:?}", labels.names);
+    assert!(sizes.iter().all(|&n| n > 0), "{sizes:?}");
+    // Mirror parts hold mirror vertex sets, up to the mesh's own asymmetry.
+    for (left, right) in [(1, 2), (4, 5), (7, 8), (11, 12), (13, 14)] {
+        assert!(sizes[left].abs_diff(sizes[right]) <= 2, "{} {} {sizes:?}", names[left], names[right]);
+    }
     assert_eq!(labels, labels_from_weights(&model, 16));
 }
 

@@ -206,15 +206,21 @@ fn sampler_distributions() {
     assert!(err.to_string().contains("'expressions'"), "{err}");
 }
 
-/// Dominant joints merge along the tree: with 2 parts asked, the three smallest leaf-most
-/// parts merge upward first.
+/// Dominant joints merge along the tree, smallest (then latest) first, mirror pairs
+/// together.
 #[test]
 fn labels_merge_along_the_tree() {
     let model = read(&tiny()).unwrap();
     // Dominant joints: vertices 0..5 → joints 0..5, vertex 5 → joint 1. Sizes 1, 2, 1, 1, 1.
     let five = labels_from_weights(&model, 5);
     assert_eq!(five.labels, [0, 1, 2, 3, 4, 1]);
-    // Merging the smallest, latest first: 4 into 3, then 3 (now 2) ... leaves {0}, {1, 2, 3, 4}.
+    // The chain's vertices are collinear, so every part has zero area: the latest merges
+    // first. Joint 4 (right_eye) takes its mirror, joint 3 (left_eye), with it: 4 asked
+    // gives 3 parts.
+    let four = labels_from_weights(&model, 4);
+    assert_eq!(four.names, ["root", "neck", "jaw"]);
+    assert_eq!(four.labels, [0, 1, 2, 2, 2, 1]);
+    // Then the jaw (with both eyes) into the neck: {0}, {1, 2, 3, 4}.
     let two = labels_from_weights(&model, 2);
     assert_eq!(two.names, ["root", "neck"]);
     assert_eq!(two.labels, [0, 1, 1, 1, 1, 1]);
