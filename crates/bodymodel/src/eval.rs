@@ -143,10 +143,25 @@ fn add_blend_shapes(vertices: &mut [Vec3], dirs: &[f64], columns: usize, coeffic
     let n = coefficients.len();
     for (vertex, rows) in vertices.iter_mut().zip(dirs.chunks_exact(3 * columns)) {
         for axis in 0..3 {
-            let row = &rows[axis * columns..axis * columns + n];
-            vertex[axis] += row.iter().zip(coefficients).map(|(d, c)| d * c).sum::<f64>();
+            vertex[axis] += dot(&rows[axis * columns..axis * columns + n], coefficients);
         }
     }
+}
+
+/// `a · b` in four interleaved partial sums, which the compiler vectorises (a single
+/// running sum must be added in order and is not); the order is fixed, so the result is
+/// the same on every run.
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut lanes = [0.0f64; 4];
+    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (a_rest, b_rest) = (a4.remainder(), b4.remainder());
+    for (x, y) in a4.zip(b4) {
+        for k in 0..4 {
+            lanes[k] += x[k] * y[k];
+        }
+    }
+    let tail: f64 = a_rest.iter().zip(b_rest).map(|(x, y)| x * y).sum();
+    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) + tail
 }
 
 /// Rodrigues' formula: the rotation by `|r|` about `r / |r|`, as
