@@ -54,13 +54,21 @@ impl BodyModel {
                 format!("holds a {}, not a dict of arrays", value.type_name()),
             ));
         };
-        let mut entries = Vec::with_capacity(items.len());
+        // A later equal key replaces an earlier one, as in a Python dict (in linear time:
+        // a hostile file may hold millions of keys).
+        let mut entries: Vec<(String, PyValue)> = Vec::with_capacity(items.len());
+        let mut slot_of: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
         for (key, value) in items {
             let PyValue::Str(key) = key else {
                 return Err(bad(path, "<pickle>", format!("has a {} key, not a string", key.type_name())));
             };
-            entries.retain(|(k, _): &(String, PyValue)| *k != key);
-            entries.push((key, value));
+            match slot_of.get(&key) {
+                Some(&slot) => entries[slot].1 = value,
+                None => {
+                    slot_of.insert(key.clone(), entries.len());
+                    entries.push((key, value));
+                }
+            }
         }
         build(path, Source::Pkl(entries))
     }

@@ -123,10 +123,11 @@ const BUDGET_SLACK: usize = 1 << 20;
 /// Reads the pickle in `bytes` (one object, up to its `STOP`; trailing bytes ignored, as
 /// Python does). Errors name the opcode and its byte offset.
 pub fn unpickle(bytes: &[u8]) -> Result<PyValue, String> {
+    let budget = bytes.len().saturating_mul(BUDGET_FACTOR).saturating_add(BUDGET_SLACK);
     let mut machine =
-        Machine { input: bytes, at: 0, nodes: Vec::new(), stack: Vec::new(), marks: Vec::new() };
+        Machine { input: bytes, at: 0, nodes: Vec::new(), stack: Vec::new(), marks: Vec::new(), budget };
     let root = machine.run()?;
-    let mut budget = bytes.len().saturating_mul(BUDGET_FACTOR).saturating_add(BUDGET_SLACK);
+    let mut budget = machine.budget;
     machine.value(root, 0, &mut budget)
 }
 
@@ -192,6 +193,9 @@ struct Machine<'a> {
     stack: Vec<Id>,
     /// Stack lengths at each MARK.
     marks: Vec<usize>,
+    /// Work left: copying a call's arguments (a memoised tuple may be called with many
+    /// times) is charged here, so parsing stays linear in the input too.
+    budget: usize,
 }
 
 impl Machine<'_> {
@@ -410,9 +414,7 @@ impl Machine<'_> {
                 b'R' => {
                     let args = self.pop().map_err(fail)?;
                     let callable = self.pop().map_err(fail)?;
-                    let Node::Tuple(args) = self.nodes[args].clone() else {
-                        return Err(fail("REDUCE's arguments are not a tuple".into()));
-                    };
+                    let args = self.arguments(args).map_err(fail)?;
                     let node = self.call(callable, args).map_err(fail)?;
                     self.push(node);
                 }
@@ -422,9 +424,7 @@ impl Machine<'_> {
                     }
                     let args = self.pop().map_err(fail)?;
                     let class = self.pop().map_err(fail)?;
-                    let Node::Tuple(args) = self.nodes[args].clone() else {
-                        return Err(fail("NEWOBJ's arguments are not a tuple".into()));
-                    };
+                    let args = self.arguments(args).map_err(fail)?;
                     let node = self.new_object(class, args).map_err(fail)?;
                     self.push(node);
                 }
@@ -496,6 +496,13 @@ impl Machine<'_> {
             return Err("the values after a MARK were consumed".into());
         }
         Ok(self.stack.split_off(mark))
+    }
+
+    /// A copy of the argument tuple `id`, charged to the budget.
+    fn arguments(&mut self, id: Id) -> Result<Vec<Id>, String> {
+        let Node::Tuple(args) = &self.nodes[id] else { return Err("the arguments are not a tuple".into()) };
+        spend(&mut self.budget, 1 + args.len())?;
+        Ok(args.clone())
     }
 
     fn extend_list(&mut self, items: Vec<Id>) -> Result<(), String> {
@@ -943,6 +950,23 @@ mod tests {
     fn a_tuple_across_a_mark_is_refused() {
         let err = unpickle(b"\x80\x02K\x01(K\x02\x86t.").unwrap_err();
         assert!(err.contains("across a MARK"), "{err}");
+    }
+
+    /// One memoised tuple of 100 000 items passed to 100 000 calls would copy 10^10
+    /// ids: refused by the budget, quickly.
+    #[test]
+    fn repeated_calls_with_a_large_tuple_are_bounded() {
+        let mut bytes = b"\x80\x02cchumpy.ch\nCh\nq\x00(".to_vec();
+        bytes.extend(std::iter::repeat_n(b'N', 100_000));
+        bytes.extend_from_slice(b"tq\x01(");
+        for _ in 0..100_000 {
+            bytes.extend_from_slice(b"h\x00h\x01R0");
+        }
+        bytes.extend_from_slice(b"1N.");
+        let start = std::time::Instant::now();
+        let err = unpickle(&bytes).unwrap_err();
+        assert!(err.contains("times the file's size"), "{err}");
+        assert!(start.elapsed().as_secs() < 5);
     }
 
     /// A list appended to itself, and a chain of lists each holding the previous one
