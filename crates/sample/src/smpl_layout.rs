@@ -19,6 +19,10 @@
 //! writes SMPL 1.1's npz keys, [`SmplLayoutModel::pkl`] a Python 2 style chumpy pickle like
 //! SMPL 1.0's `.pkl` (`v_template` and `shapedirs` as `chumpy.ch.Ch`, `J_regressor` a
 //! scipy CSC matrix).
+//!
+//! Licence of the model: CC0 1.0, like the MakeHuman / MPFB2 assets it is made from
+//! (`data-samples/source/LICENSE.md`). No part of a licensed SMPL-family model is used:
+//! only SMPL's key names, array layout and joint tree.
 
 use desal_io::npz::{AnyArray, AnyData, NpzEntry, encode_npy_any, encode_npz_entries};
 use desal_mesh::Vec3;
