@@ -116,7 +116,7 @@ pub const ALLOWED: &[(&str, &str)] = &[
 /// Nesting deeper than this (or a cycle) is refused.
 pub const MAX_DEPTH: usize = 100;
 /// The conversion to [`PyValue`]s may produce at most this many units (one per value,
-/// plus its bytes) per input byte, plus [`BUDGET_SLACK`].
+/// plus its bytes) per input byte, plus 1 MiB.
 pub const BUDGET_FACTOR: usize = 8;
 const BUDGET_SLACK: usize = 1 << 20;
 
