@@ -225,3 +225,86 @@ fn labels_merge_along_the_tree() {
     assert_eq!(two.names, ["root", "neck"]);
     assert_eq!(two.labels, [0, 1, 1, 1, 1, 1]);
 }
+
+/// A chain of `joints` joints (joint j at (j, 0, 0), vertex j on it, weighted to it), with
+/// `extra` arrays added: enough for the kinds whose layout is tested here.
+fn chain(joints: usize, extra: Vec<(String, AnyArray)>) -> Vec<(String, AnyArray)> {
+    let v = joints;
+    let f64s = |shape: Vec<usize>, data: Vec<f64>| AnyArray { shape, data: AnyData::F64(data) };
+    let identity: Vec<f64> = (0..v * v).map(|k| if k % (v + 1) == 0 { 1.0 } else { 0.0 }).collect();
+    let parents: Vec<i64> = (0..joints as i64).map(|j| j - 1).chain(0..joints as i64).collect();
+    let mut arrays = vec![
+        ("v_template".into(), f64s(vec![v, 3], (0..v).flat_map(|j| [j as f64, 0.0, 0.0]).collect())),
+        ("f".into(), AnyArray { shape: vec![1, 3], data: AnyData::U32(vec![0, 1, 2]) }),
+        ("shapedirs".into(), f64s(vec![v, 3, 10], vec![0.0; v * 30])),
+        ("posedirs".into(), f64s(vec![v, 3, 9 * (joints - 1)], vec![0.0; v * 27 * (joints - 1)])),
+        ("weights".into(), f64s(vec![v, joints], identity.clone())),
+        ("kintree_table".into(), AnyArray { shape: vec![2, joints], data: AnyData::I64(parents) }),
+        ("J_regressor".into(), f64s(vec![joints, v], identity)),
+    ];
+    for (key, array) in extra {
+        match arrays.iter_mut().find(|(k, _)| *k == key) {
+            Some(slot) => slot.1 = array,
+            None => arrays.push((key, array)),
+        }
+    }
+    arrays
+}
+
+/// SMPL-H: 52 joints; the mean hand poses land on joints 22.. and 37..; sampled hand
+/// joints spread 0.2 rad about them, body joints 0.3 about zero.
+#[test]
+fn smplh_hand_means_and_spreads() {
+    let mean = |value: f64| AnyArray { shape: vec![45], data: AnyData::F64(vec![value; 45]) };
+    let arrays = chain(52, vec![("hands_meanl".into(), mean(0.5)), ("hands_meanr".into(), mean(-0.5))]);
+    let model = read(&arrays).unwrap();
+    assert_eq!(model.kind, ModelKind::SmplH);
+    assert_eq!(
+        (model.pose_mean[21], model.pose_mean[22], model.pose_mean[51]),
+        (Vec3::zeros(), Vec3::repeat(0.5), Vec3::repeat(-0.5))
+    );
+    // The means are also kept as they came, for a writer.
+    assert!(model.extras.iter().any(|(k, _)| k == "hands_meanl"));
+    let config = SampleConfig { shapes: 1, poses: 400, ..SampleConfig::default() };
+    let mut sampler = Sampler::new(&model, config).unwrap();
+    sampler.next_sample();
+    let (mut body, mut hand, mut hand_mean) = (0.0, 0.0, Vec3::zeros());
+    let mut count = 0.0;
+    while let Some(s) = sampler.next_sample() {
+        body += s.pose[5].norm_squared() / 3.0;
+        hand += (s.pose[30] - Vec3::repeat(0.5)).norm_squared() / 3.0;
+        hand_mean += s.pose[30];
+        count += 1.0;
+    }
+    let (body, hand) = ((body / count).sqrt(), (hand / count).sqrt());
+    assert!((body - 0.3).abs() < 0.03 && (hand - 0.2).abs() < 0.02, "{body} {hand}");
+    assert!((hand_mean / count - Vec3::repeat(0.5)).norm() < 0.05);
+}
+
+/// MANO: 16 joints; `shapedirs` may come flattened, `(V·3·S,)`.
+#[test]
+fn mano_flattened_shapedirs() {
+    let mut flat = vec![0.0; 16 * 3 * 10];
+    flat[(4 * 3 + 1) * 10 + 2] = 0.5; // vertex 4, y, beta 2
+    let arrays =
+        chain(16, vec![("shapedirs".into(), AnyArray { shape: vec![480], data: AnyData::F64(flat) })]);
+    let model = read(&arrays).unwrap();
+    assert_eq!((model.kind, model.shape_count), (ModelKind::Mano, 10));
+    let shaped = model.shape(&[0.0, 0.0, 2.0], &[]).unwrap();
+    assert_eq!(shaped.vertices[4], Vec3::new(4.0, 1.0, 0.0));
+}
+
+/// SMPL-X 1.0: `shapedirs` 20 wide is 10 shape + 10 expression; 55 joints.
+#[test]
+fn smplx_v1_split() {
+    let arrays = chain(
+        55,
+        vec![(
+            "shapedirs".into(),
+            AnyArray { shape: vec![55, 3, 20], data: AnyData::F64(vec![0.0; 55 * 60]) },
+        )],
+    );
+    let model = read(&arrays).unwrap();
+    assert_eq!((model.kind, model.shape_count, model.expression_count), (ModelKind::SmplX, 10, 10));
+    assert_eq!(model.kind.joint_names()[22], "jaw");
+}
