@@ -34,6 +34,15 @@ pub struct Posed {
     pub joints: Vec<Vec3>,
 }
 
+/// One item of [`BodyModel::pose_batch`].
+#[derive(Debug, Clone, Copy)]
+pub struct PoseItem<'a> {
+    pub shaped: &'a Shaped,
+    /// One axis-angle per joint.
+    pub pose: &'a [Vec3],
+    pub translation: Vec3,
+}
+
 /// One evaluation's parameters. Shorter `betas` or `expression` than the model's bases
 /// leave the remaining components at zero (as body-models does).
 #[derive(Debug, Clone, Copy)]
@@ -61,33 +70,45 @@ impl BodyModel {
 
     /// Steps 3–5: `shaped` posed by one axis-angle per joint, then translated.
     pub fn pose(&self, shaped: &Shaped, pose: &[Vec3], translation: Vec3) -> Result<Posed, BodyModelError> {
-        if pose.len() != self.joint_count() {
+        let mut posed = self.pose_batch(&[PoseItem { shaped, pose, translation }])?;
+        Ok(posed.pop().expect("one item in, one out"))
+    }
+
+    /// [`BodyModel::pose`] for several items at once, the same numbers bit for bit: the
+    /// pose correctives, the largest array (`V · 3 · 9 (J − 1)` values), are read once for
+    /// the whole batch instead of once per pose.
+    pub fn pose_batch(&self, items: &[PoseItem]) -> Result<Vec<Posed>, BodyModelError> {
+        if let Some(item) = items.iter().find(|item| item.pose.len() != self.joint_count()) {
             return Err(BodyModelError::BadParameters {
                 what: "joint rotations",
-                given: pose.len(),
+                given: item.pose.len(),
                 available: self.joint_count(),
             });
         }
-        let rotations: Vec<Mat3> = pose.iter().map(rodrigues).collect();
-        let posed_rest = self.add_pose_blend_shapes(&shaped.vertices, &rotations);
-        let world = self.forward_kinematics(&shaped.joints, &rotations);
-        // Skinning transforms: world motion relative to the rest joint.
-        let skinning: Vec<(Mat3, Vec3)> =
-            world.iter().zip(&shaped.joints).map(|((r, t), j)| (*r, t - r * j)).collect();
-        let vertices = posed_rest
-            .iter()
-            .enumerate()
-            .map(|(v, p)| {
-                let (mut r, mut t) = (Mat3::zeros(), Vec3::zeros());
-                for (joint, w) in self.weights.row(v) {
-                    r += skinning[joint].0 * w;
-                    t += skinning[joint].1 * w;
-                }
-                r * p + t + translation
-            })
-            .collect();
-        let joints = world.iter().map(|(_, t)| t + translation).collect();
-        Ok(Posed { vertices, joints })
+        let rotations: Vec<Vec<Mat3>> =
+            items.iter().map(|item| item.pose.iter().map(rodrigues).collect()).collect();
+        let posed_rest = self.add_pose_blend_shapes(items, &rotations);
+        let posed = items.iter().zip(&rotations).zip(posed_rest).map(|((item, rotations), rest)| {
+            let world = self.forward_kinematics(&item.shaped.joints, rotations);
+            // Skinning transforms: world motion relative to the rest joint.
+            let skinning: Vec<(Mat3, Vec3)> =
+                world.iter().zip(&item.shaped.joints).map(|((r, t), j)| (*r, t - r * j)).collect();
+            let vertices = rest
+                .iter()
+                .enumerate()
+                .map(|(v, p)| {
+                    let (mut r, mut t) = (Mat3::zeros(), Vec3::zeros());
+                    for (joint, w) in self.weights.row(v) {
+                        r += skinning[joint].0 * w;
+                        t += skinning[joint].1 * w;
+                    }
+                    r * p + t + item.translation
+                })
+                .collect();
+            let joints = world.iter().map(|(_, t)| t + item.translation).collect();
+            Posed { vertices, joints }
+        });
+        Ok(posed.collect())
     }
 
     /// Steps 1–5 in one call.
@@ -96,17 +117,35 @@ impl BodyModel {
         self.pose(&shaped, params.pose, params.translation)
     }
 
-    /// `v_shaped + posedirs · vec(R_j − I)`, joints 1.. (the root's rotation moves the
-    /// whole body rigidly and has no corrective).
-    fn add_pose_blend_shapes(&self, shaped: &[Vec3], rotations: &[Mat3]) -> Vec<Vec3> {
-        let mut feature = Vec::with_capacity(self.pose_feature_count());
-        for r in &rotations[1..] {
-            let delta = r - Mat3::identity();
-            // Row by row, as numpy flattens a C-order (3, 3) block.
-            feature.extend((0..9).map(|k| delta[(k / 3, k % 3)]));
+    /// Per item, `v_shaped + posedirs · vec(R_j − I)` over joints 1.. (the root's rotation
+    /// moves the whole body rigidly and has no corrective); each row of `posedirs` is
+    /// read once for all items.
+    fn add_pose_blend_shapes(&self, items: &[PoseItem], rotations: &[Vec<Mat3>]) -> Vec<Vec<Vec3>> {
+        let features: Vec<Vec<f64>> = rotations
+            .iter()
+            .map(|rotations| {
+                let mut feature = Vec::with_capacity(self.pose_feature_count());
+                for r in &rotations[1..] {
+                    let delta = r - Mat3::identity();
+                    // Row by row, as numpy flattens a C-order (3, 3) block.
+                    feature.extend((0..9).map(|k| delta[(k / 3, k % 3)]));
+                }
+                feature
+            })
+            .collect();
+        let mut out: Vec<Vec<Vec3>> = items.iter().map(|item| item.shaped.vertices.clone()).collect();
+        let columns = self.pose_feature_count();
+        if columns == 0 {
+            return out;
         }
-        let mut out = shaped.to_vec();
-        add_blend_shapes(&mut out, &self.posedirs, feature.len(), &feature);
+        for (v, rows) in self.posedirs.chunks_exact(3 * columns).enumerate() {
+            for axis in 0..3 {
+                let row = &rows[axis * columns..(axis + 1) * columns];
+                for (posed, feature) in out.iter_mut().zip(&features) {
+                    posed[v][axis] += dot(row, feature);
+                }
+            }
+        }
         out
     }
 

@@ -52,8 +52,10 @@
 //! - **expression** (SMPL-X, FLAME, when `expressions` is set): the first
 //!   `expression_components` (default 10) coefficients ~ N(0, 1) per pose.
 //!
-//! The stream is deterministic for a `seed` (ChaCha8, `rand_distr`'s normal). Each sample
-//! is computed when asked for; one shape's rest surface is kept while its poses are made.
+//! The stream is deterministic for a `seed` (ChaCha8, `rand_distr`'s normal). Samples are
+//! computed when asked for, up to 8 poses of a shape at a time ([`BodyModel::pose_batch`]
+//! reads the pose correctives once for them, the same numbers as one by one); one shape's
+//! rest surface is kept while its poses are made.
 //!
 //! # Part labels
 //!
@@ -72,7 +74,7 @@ pub mod read;
 pub mod sample;
 
 pub use error::BodyModelError;
-pub use eval::{Params, Posed, Shaped, rodrigues};
+pub use eval::{Params, PoseItem, Posed, Shaped, rodrigues};
 pub use labels::labels_from_weights;
 pub use model::{BodyModel, ExtraEntry, JointClass, ModelKind, SparseRows};
 pub use sample::{Sample, SampleConfig, Sampler};

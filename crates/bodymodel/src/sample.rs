@@ -1,5 +1,6 @@
 //! Sampling a model over shapes and poses, streamed: [`Sampler`] yields one posed surface
-//! at a time, so 2048 samples of a 10k-vertex model never sit in memory together.
+//! at a time, so 2048 samples of a 10k-vertex model never sit in memory together (it
+//! evaluates up to [`BATCH`] poses of a shape together and holds them until taken).
 //!
 //! The sequence (the crate docs give the distributions): sample 0 is the template — the
 //! mean shape in the zero pose, group 0 — then for each shape `s` in `0..shapes`, its
@@ -9,6 +10,8 @@
 //! axis, then the expression. The same seed and settings give the same samples, bit for
 //! bit.
 
+use std::collections::VecDeque;
+
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -16,10 +19,14 @@ use rand_distr::StandardNormal;
 use desal_mesh::Vec3;
 
 use crate::error::BodyModelError;
-use crate::eval::Shaped;
+use crate::eval::{PoseItem, Shaped};
 use crate::model::{BodyModel, JointClass};
 
 const FITS: &str = "sampled parameters fit the model by construction";
+
+/// Poses of one shape evaluated together (each row of the pose correctives is then read
+/// once for all of them); also the most samples held at once besides the one returned.
+pub const BATCH: usize = 8;
 
 /// How shapes and poses are drawn. The defaults are the crate docs' distributions.
 #[derive(Debug, Clone, PartialEq)]
@@ -124,11 +131,13 @@ pub struct Sampler<'m> {
     model: &'m BodyModel,
     config: SampleConfig,
     rng: ChaCha8Rng,
-    /// Index of the next sample in `0..len`.
+    /// Index of the next sample to make, in `0..=len`.
     next: usize,
     len: usize,
     /// The current shape's betas and rest surface.
     shaped: Option<(Vec<f64>, Shaped)>,
+    /// Samples made but not yet taken (at most [`BATCH`]).
+    pending: VecDeque<Sample>,
 }
 
 impl<'m> Sampler<'m> {
@@ -136,34 +145,39 @@ impl<'m> Sampler<'m> {
         config.validate(model)?;
         let len = 1 + config.shapes * config.poses;
         let rng = ChaCha8Rng::seed_from_u64(config.seed);
-        Ok(Self { model, config, rng, next: 0, len, shaped: None })
+        Ok(Self { model, config, rng, next: 0, len, shaped: None, pending: VecDeque::new() })
     }
 
     /// The next sample and its parameters, `None` after the last.
     pub fn next_sample(&mut self) -> Option<Sample> {
-        if self.next >= self.len {
-            return None;
+        if self.pending.is_empty() && self.next < self.len {
+            self.make_batch();
         }
-        let index = self.next;
-        self.next += 1;
-        Some(self.make(index))
+        self.pending.pop_front()
     }
 
-    /// Sample `index`. Its parameters fit the model by construction (component counts
-    /// capped at the model's, one rotation per joint), so evaluation cannot fail.
-    fn make(&mut self, index: usize) -> Sample {
+    /// The next samples, from `self.next`: the template alone, or up to [`BATCH`] poses of
+    /// one shape, evaluated together. Their parameters are drawn in sample order, so the
+    /// stream does not depend on the batching; they fit the model by construction
+    /// (component counts capped at the model's, one rotation per joint), so evaluation
+    /// cannot fail.
+    fn make_batch(&mut self) {
         let model = self.model;
+        let index = self.next;
         if index == 0 {
             let shaped = model.shape(&[], &[]).expect(FITS);
             let pose = vec![Vec3::zeros(); model.joint_count()];
             let posed = model.pose(&shaped, &pose, Vec3::zeros()).expect(FITS);
-            return Sample {
+            let vertices = posed.vertices;
+            self.pending.push_back(Sample {
                 group: 0,
                 betas: Vec::new(),
                 expression: Vec::new(),
                 pose,
-                vertices: posed.vertices,
-            };
+                vertices,
+            });
+            self.next = 1;
+            return;
         }
         let (shape, pose_index) = ((index - 1) / self.config.poses, (index - 1) % self.config.poses);
         if pose_index == 0 {
@@ -171,17 +185,34 @@ impl<'m> Sampler<'m> {
             let shaped = model.shape(&betas, &[]).expect(FITS);
             self.shaped = Some((betas, shaped));
         }
-        let pose = self.draw_pose();
-        let expression = self.draw_expression();
+        let count = BATCH.min(self.config.poses - pose_index);
+        let draws: Vec<(Vec<Vec3>, Vec<f64>)> =
+            (0..count).map(|_| (self.draw_pose(), self.draw_expression())).collect();
         let (betas, shaped) = self.shaped.as_ref().expect("a shape is drawn before its poses");
-        let posed = if expression.is_empty() {
-            model.pose(shaped, &pose, Vec3::zeros())
-        } else {
-            // An expression changes the rest surface (and, through the regressor, the joints).
-            model.pose(&model.shape(betas, &expression).expect(FITS), &pose, Vec3::zeros())
-        };
-        let vertices = posed.expect(FITS).vertices;
-        Sample { group: shape + 1, betas: betas.clone(), expression, pose, vertices }
+        // An expression changes the rest surface (and, through the regressor, the joints).
+        let with_expression: Vec<Option<Shaped>> =
+            draws.iter().map(|(_, e)| (!e.is_empty()).then(|| model.shape(betas, e).expect(FITS))).collect();
+        let items: Vec<PoseItem> = draws
+            .iter()
+            .zip(&with_expression)
+            .map(|((pose, _), own)| PoseItem {
+                shaped: own.as_ref().unwrap_or(shaped),
+                pose,
+                translation: Vec3::zeros(),
+            })
+            .collect();
+        let posed = model.pose_batch(&items).expect(FITS);
+        for ((pose, expression), posed) in draws.into_iter().zip(posed) {
+            let vertices = posed.vertices;
+            self.pending.push_back(Sample {
+                group: shape + 1,
+                betas: betas.clone(),
+                expression,
+                pose,
+                vertices,
+            });
+        }
+        self.next += count;
     }
 
     fn normal(&mut self) -> f64 {
@@ -228,7 +259,7 @@ impl Iterator for Sampler<'_> {
     }
 
     fn size_hint(&self) -> (usize, Option<usize>) {
-        let left = self.len - self.next;
+        let left = self.len - self.next + self.pending.len();
         (left, Some(left))
     }
 }

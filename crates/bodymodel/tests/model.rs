@@ -308,3 +308,25 @@ fn smplx_v1_split() {
     assert_eq!((model.kind, model.shape_count, model.expression_count), (ModelKind::SmplX, 10, 10));
     assert_eq!(model.kind.joint_names()[22], "jaw");
 }
+
+/// Batched evaluation is the single one bit for bit: every sample (poses 11 per shape,
+/// so batches of 8 and 3, with expressions) equals its own parameters evaluated alone.
+#[test]
+fn batches_match_single_evaluation() {
+    let model = read(&tiny()).unwrap();
+    let config = SampleConfig { shapes: 2, poses: 11, expressions: true, seed: 3, ..SampleConfig::default() };
+    let mut sampler = Sampler::new(&model, config).unwrap();
+    assert_eq!(sampler.len(), 23);
+    let mut count = 0;
+    while let Some(s) = sampler.next_sample() {
+        let shaped = model.shape(&s.betas, &s.expression).unwrap();
+        assert_eq!(
+            model.pose(&shaped, &s.pose, Vec3::zeros()).unwrap().vertices,
+            s.vertices,
+            "sample {count}"
+        );
+        count += 1;
+        assert_eq!(sampler.len(), 23 - count);
+    }
+    assert_eq!(count, 23);
+}
