@@ -4,7 +4,8 @@
 //! generated inputs: conversions of a cropped sample mesh to ASCII and big-endian PLY,
 //! OBJ and OFF (so that header and text mutations hit small inputs fast), labels whose
 //! part names are in several scripts, a tiny rig ([`rig`]) in both glTF containers, and
-//! `hierarchy.npz` files written by desal-io's own writer. Nothing here comes from
+//! `hierarchy.npz` files written by desal-io's own writer, and the pickle fixtures of
+//! desal-io's unpickler (`crates/io/tests/fixtures/*.pkl`). Nothing here comes from
 //! `../shared`.
 
 pub mod rig;
@@ -158,6 +159,10 @@ pub fn seeds(target: Target, root: &Path) -> Result<Vec<Seed>, String> {
                 let bytes = desal_io::npz::encode_npz(&arrays)?;
                 Ok(Seed { name: format!("hierarchy.npz, {name}"), bytes })
             })
+            .collect::<Result<_, String>>()?,
+        Target::Pickle => ["py2_chumpy.pkl", "py3_protocol2.pkl", "py3_protocol4.pkl"]
+            .into_iter()
+            .map(|name| read(&format!("crates/io/tests/fixtures/{name}")))
             .collect::<Result<_, String>>()?,
         Target::CanaryGltfStride => seeds(Target::GltfGlb, root)?,
         Target::CanaryNpzShape => seeds(Target::Npz, root)?,

@@ -1,7 +1,8 @@
 //! A stable-Rust mutation fuzzer for desal's readers: PLY, OBJ, OFF, text and JSON part
 //! labels (names in any script), the binary artifacts (every kind, with the checksum
 //! recomputed after most mutations so that the payload decoder is what gets attacked),
-//! skinned glTF rigs in both containers (`.gltf` with `data:` URI buffers, `.glb`), and
+//! skinned glTF rigs in both containers (`.gltf` with `data:` URI buffers, `.glb`),
+//! body-model pickles (the restricted unpickler, `pickle::unpickle`), and
 //! `hierarchy.npz`; the last three are mutated structurally ([`mutate::gltf`],
 //! [`mutate::npz`]) so that well-formed files with lying numbers reach the decoders.
 //!
@@ -52,6 +53,8 @@ pub enum Target {
     GltfGlb,
     /// `hierarchy.npz`.
     Npz,
+    /// A body-model `.pkl` through the restricted unpickler.
+    Pickle,
     /// Panics on iteration 2: proves the harness catches and saves a panic.
     CanaryPanic,
     /// Aborts on iteration 2: proves the supervisor catches an abort.
@@ -77,7 +80,7 @@ pub enum Target {
 
 impl Target {
     /// The real targets, in the order a run visits them.
-    pub const ALL: [Target; 9] = [
+    pub const ALL: [Target; 10] = [
         Target::Ply,
         Target::Obj,
         Target::Off,
@@ -87,6 +90,7 @@ impl Target {
         Target::GltfJson,
         Target::GltfGlb,
         Target::Npz,
+        Target::Pickle,
     ];
 
     pub fn name(self) -> &'static str {
@@ -100,6 +104,7 @@ impl Target {
             Target::GltfJson => "gltf-json",
             Target::GltfGlb => "gltf-glb",
             Target::Npz => "npz",
+            Target::Pickle => "pickle",
             Target::CanaryPanic => "canary-panic",
             Target::CanaryAbort => "canary-abort",
             Target::CanaryHang => "canary-hang",
@@ -137,6 +142,7 @@ impl Target {
             Target::GltfJson => "fuzz.gltf",
             Target::GltfGlb => "fuzz.glb",
             Target::Npz => "hierarchy.npz",
+            Target::Pickle => "model.pkl",
             Target::CanaryGltfStride => "canary.glb",
             Target::CanaryNpzShape => "canary.npz",
             _ => "canary.bin",
@@ -256,6 +262,15 @@ pub fn execute(target: Target, iteration: u64, bytes: &[u8]) -> bool {
                 Err(_) => false,
             }
         }
+        // What desal-bodymodel does with a pickle: walk the value for its arrays.
+        Target::Pickle => match desal_io::pickle::unpickle(bytes) {
+            Ok(value) => {
+                let mut arrays = 0;
+                walk_pickle(&value, &mut arrays);
+                true
+            }
+            Err(_) => false,
+        },
         Target::CanaryPanic => {
             assert!(iteration != 2, "canary panic");
             false
@@ -474,4 +489,30 @@ pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
         .map(|s| s.to_string())
         .or_else(|| payload.downcast_ref::<String>().cloned())
         .unwrap_or_else(|| "a panic with a non-text payload".into())
+}
+
+/// Counts the arrays of a pickled value and checks each holds as many values as its shape
+/// says, as a body-model reader relies on.
+fn walk_pickle(value: &desal_io::pickle::PyValue, arrays: &mut usize) {
+    use desal_io::pickle::PyValue;
+    match value {
+        PyValue::Array(a) => {
+            *arrays += 1;
+            assert_eq!(a.shape.iter().product::<usize>(), a.data.len(), "an array whose shape lies");
+        }
+        PyValue::List(items) | PyValue::Tuple(items) | PyValue::Set(items) => {
+            items.iter().for_each(|v| walk_pickle(v, arrays))
+        }
+        PyValue::Dict(items) => items.iter().for_each(|(k, v)| {
+            walk_pickle(k, arrays);
+            walk_pickle(v, arrays);
+        }),
+        PyValue::Object { args, state, .. } => {
+            args.iter().for_each(|v| walk_pickle(v, arrays));
+            if let Some(state) = state {
+                walk_pickle(state, arrays);
+            }
+        }
+        _ => {}
+    }
 }

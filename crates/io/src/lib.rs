@@ -1,5 +1,6 @@
-//! Every byte in or out of desal: PLY and OBJ meshes, part labels, JSON reports, and the
-//! versioned artifact envelope with its bincode codec.
+//! Every byte in or out of desal: PLY and OBJ meshes, part labels, JSON reports, the
+//! versioned artifact envelope with its bincode codec, and the numpy files (`npz.rs`) and
+//! restricted pickles (`pickle.rs`) that parametric body models come in.
 //!
 //! **Invariant:** this is the only crate that knows file formats, magic numbers and
 //! format versions. Every error names the file it is about; every write is atomic
@@ -17,6 +18,7 @@ pub mod labels;
 pub mod npz;
 pub mod obj;
 pub mod off;
+pub mod pickle;
 pub mod ply;
 
 use std::path::Path;

@@ -16,6 +16,9 @@
 //! `labels.json` and `labels.txt`. Output is deterministic: ordered maps only, fixed
 //! file contents, no timestamps.
 //!
+//! [`smpl_layout::smpl_layout_model`] makes the same body into a CC0 body model in SMPL's
+//! layout (desal-bodymodel's fixture).
+//!
 //! Frame of the output: the OBJ's own — metres, **Y up**, the body facing **+Z**, its
 //! left side at **+X**; the template is pose 0 (`00_rest`, the base mesh's A pose).
 
@@ -26,6 +29,7 @@ pub mod quality;
 pub mod rig;
 pub mod skeleton;
 pub mod skinning;
+pub mod smpl_layout;
 pub mod source;
 
 use std::path::{Path, PathBuf};
