@@ -7,6 +7,7 @@ mod faults;
 mod hierarchy;
 mod hostile;
 mod ingest;
+mod model;
 mod parts;
 mod rig;
 mod stages;

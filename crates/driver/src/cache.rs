@@ -4,7 +4,7 @@
 //!
 //! | field            | what                                                            |
 //! |------------------|-----------------------------------------------------------------|
-//! | `stage`          | stage id: `ingest`, `labels`, `rig-ingest`, `rig-labels`, `parts`, `fit`, `saliency`, `simplify`, `map`, `hierarchy-<k>` (one per level), and `desal eval`'s `floor` |
+//! | `stage`          | stage id: `ingest`, `labels`, `rig-ingest`, `rig-labels`, `model-ingest`, `model-labels`, `parts`, `fit`, `saliency`, `simplify`, `map`, `hierarchy-<k>` (one per level), and `desal eval`'s `floor` |
 //! | `stage_version`  | version of the stage's algorithm (bumped when output changes)   |
 //! | `format_version` | format version of the artifact kind it writes                   |
 //! | `parameters`     | the parameters the user set, canonical JSON (sorted keys); also recorded in the artifact's producer |

@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 use crate::stages::fit::FitParams;
 use crate::stages::hierarchy::HierarchyParams;
 use crate::stages::ingest::{IngestParams, TemplateSpec, pose_name};
+use crate::stages::model::{ModelInput, ModelParams};
 use crate::stages::parts::PartsParams;
 use crate::stages::rig::{RigInput, RigParams};
 use crate::stages::saliency::SaliencyParams;
@@ -53,6 +54,10 @@ pub struct DatasetToml {
     /// `[dataset.rig]`: a skinned glTF in place of `poses` and `labels`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rig: Option<RigParams>,
+    /// `[dataset.model]`: a body model (SMPL family), sampled, in place of `poses` and
+    /// `labels`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<ModelParams>,
     /// Part discovery with `labels = "auto"`: `parts = K`, or a `[dataset.parts]` table.
     #[serde(default, deserialize_with = "crate::stages::parts::count_or_table")]
     pub parts: PartsParams,
@@ -103,6 +108,8 @@ pub enum LabelsSource {
     Auto,
     /// From the rig's dominant joints.
     Rig,
+    /// From the model's skinning weights.
+    Model,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -119,7 +126,8 @@ pub struct Dataset {
     /// Pose files, sorted (glob) or in the listed order.
     pub pose_files: Vec<PathBuf>,
     pub labels: LabelsSource,
-    /// The rig file of a `[dataset.rig]` dataset, absolute.
+    /// The rig file of a `[dataset.rig]` dataset, or the model file of a
+    /// `[dataset.model]` one, absolute.
     pub rig_file: Option<PathBuf>,
     /// Where this dataset's outputs go.
     pub out_dir: PathBuf,
@@ -138,6 +146,10 @@ impl Dataset {
                 LabelsSource::File(file) => LabelsInput::File(file),
                 LabelsSource::Auto => LabelsInput::Auto(&self.spec.parts),
                 LabelsSource::Rig => LabelsInput::Rig,
+                LabelsSource::Model => match self.model_input() {
+                    Some(model) => LabelsInput::Model(model),
+                    None => unreachable!("a model dataset has its file"),
+                },
             },
             fit: &self.spec.fit,
             saliency: &self.spec.saliency,
@@ -147,6 +159,14 @@ impl Dataset {
                 (Some(file), Some(params)) => Some(RigInput { file, params }),
                 _ => None,
             },
+            model: self.model_input(),
+        }
+    }
+
+    fn model_input(&self) -> Option<ModelInput<'_>> {
+        match (&self.rig_file, &self.spec.model) {
+            (Some(file), Some(params)) => Some(ModelInput { file, params }),
+            _ => None,
         }
     }
 }
@@ -207,8 +227,24 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
             );
         }
         let in_dataset = || format!("{}: dataset '{}'", path.display(), spec.name);
-        let (pose_files, labels, rig_file) = match (&spec.rig, &spec.poses, &spec.labels) {
-            (Some(rig), None, None) => {
+        let (pose_files, labels, rig_file) = match (&spec.model, &spec.rig, &spec.poses, &spec.labels) {
+            (Some(model), None, None, None) => {
+                if spec.template.is_some() || spec.ignore_pose_faces || spec.parts != PartsParams::default() {
+                    bail!(
+                        "{}: a [dataset.model] takes its template (the mean shape in the zero pose) and \
+                         parts (model.parts) from the model: remove `template`, `ignore_pose_faces` and `parts`",
+                        in_dataset()
+                    );
+                }
+                (Vec::new(), LabelsSource::Model, Some(base.join(&model.file)))
+            }
+            (Some(_), _, _, _) => {
+                bail!(
+                    "{}: a [dataset.model] replaces `poses`, `labels` and [dataset.rig]: give one of them",
+                    in_dataset()
+                )
+            }
+            (None, Some(rig), None, None) => {
                 if spec.template.is_some() || spec.ignore_pose_faces || spec.parts != PartsParams::default() {
                     bail!(
                         "{}: a [dataset.rig] takes its template (the bind pose) and parts from the rig: \
@@ -218,13 +254,13 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
                 }
                 (Vec::new(), LabelsSource::Rig, Some(base.join(&rig.file)))
             }
-            (Some(_), _, _) => {
+            (None, Some(_), _, _) => {
                 bail!(
                     "{}: a [dataset.rig] replaces `poses` and `labels`: give one or the other",
                     in_dataset()
                 )
             }
-            (None, Some(poses), Some(labels)) => {
+            (None, None, Some(poses), Some(labels)) => {
                 let pose_files = resolve_poses(&base, poses).with_context(in_dataset)?;
                 let labels = match labels {
                     LabelsSpec::File(file) => LabelsSource::File(base.join(file)),
@@ -232,8 +268,11 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
                 };
                 (pose_files, labels, None)
             }
-            (None, _, _) => {
-                bail!("{}: give `poses` and `labels`, or a [dataset.rig] table", in_dataset())
+            (None, None, _, _) => {
+                bail!(
+                    "{}: give `poses` and `labels`, a [dataset.rig] or a [dataset.model] table",
+                    in_dataset()
+                )
             }
         };
         // Every stage parameter is checked now, before any stage runs.
@@ -269,6 +308,9 @@ fn check_parameters(spec: &DatasetToml, pose_files: &[PathBuf]) -> Result<()> {
         rig.frame_config()?;
         rig.weight_options()?;
         rig.parts_config()?;
+    }
+    if let Some(model) = &spec.model {
+        model.config()?;
     }
     if let Some(h) = &spec.hierarchy {
         h.config()?;

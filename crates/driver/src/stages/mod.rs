@@ -11,6 +11,7 @@ pub mod fit;
 pub mod hierarchy;
 pub mod ingest;
 pub mod map;
+pub mod model;
 pub mod parts;
 pub mod rig;
 pub mod runner;
@@ -50,6 +51,8 @@ pub struct DatasetInputs<'a> {
     /// `[dataset.rig]`: the poses and labels come from a skinned glTF instead of
     /// `ingest` and `labels`.
     pub rig: Option<rig::RigInput<'a>>,
+    /// `[dataset.model]`: the poses and labels come from a body model, sampled.
+    pub model: Option<model::ModelInput<'a>>,
 }
 
 /// Where a dataset's part labels come from: a labels file, or discovery from the poses.
@@ -59,6 +62,8 @@ pub enum LabelsInput<'a> {
     Auto(&'a PartsParams),
     /// From the rig of [`DatasetInputs::rig`] (dominant joints).
     Rig,
+    /// From the skinning weights of [`DatasetInputs::model`], this one.
+    Model(model::ModelInput<'a>),
 }
 
 /// The stages of one dataset, run or found in the cache. Bodies are decoded lazily, the
@@ -116,12 +121,16 @@ pub fn run_stages(
     runner: &mut StageRunner,
     progress: &dyn Progress,
 ) -> Result<DatasetStages> {
-    // Ingest: keyed on the bytes of every pose file (or of the rig), never on their paths.
-    let poses = match &inputs.rig {
-        Some(rig) => {
+    // Ingest: keyed on the bytes of every pose file (or of the rig or the model), never on
+    // their paths.
+    let poses = match (&inputs.rig, &inputs.model) {
+        (Some(rig), _) => {
             runner.stage(Stage::Ingest, || rig.ingest_key(), &rig.hints(), || rig.compute_poses())?
         }
-        None => {
+        (None, Some(model)) => {
+            runner.stage(Stage::Ingest, || model.ingest_key(), &model.hints(), || model.compute_poses())?
+        }
+        (None, None) => {
             let (key, template) = inputs.ingest.key()?;
             runner.stage(
                 Stage::Ingest,
@@ -138,6 +147,10 @@ pub fn run_stages(
     // Labels: a file validated against the pose set and keyed on its bytes, or parts
     // discovered from the poses and keyed on their parameters and the poses' hash.
     let (labels, parts_summary) = match (&inputs.rig, inputs.labels) {
+        (None, LabelsInput::Model(model)) => {
+            let key = || model.labels_key(poses.hash()?);
+            (runner.stage(Stage::Ingest, key, &model.hints(), || model.compute_labels(set()?))?, None)
+        }
         (Some(rig), LabelsInput::Rig) => {
             let key = || rig.labels_key(poses.hash()?);
             (runner.stage(Stage::Ingest, key, &rig.hints(), || rig.compute_labels(set()?))?, None)

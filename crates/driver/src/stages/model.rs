@@ -1,0 +1,211 @@
+//! `[dataset.model]`: a parametric body model (SMPL, SMPL-H, SMPL-X, MANO, FLAME; `.npz`
+//! or a chumpy `.pkl`, `desal-bodymodel`) sampled over shapes and poses in place of pose
+//! files. Ingest evaluates the model at the template (the mean shape in the zero pose)
+//! and at `shapes × poses` random samples (`desal_bodymodel::Sampler`, seeded); the
+//! labels are the skinning weights' dominant joints merged to about `parts` parts
+//! (`desal_bodymodel::labels_from_weights`).
+//!
+//! Both stages are keyed by the model file's bytes (never its path) and every sampling
+//! setting. Pose names are `template` and `s<shape>-p<pose>`, so a sample's shape (its
+//! person) can be read from its name.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, bail};
+use desal_bodymodel::{BodyModel, SampleConfig, Sampler, labels_from_weights};
+use desal_io::artifact::{ArtifactKind, ContentHash, LabelsV1, PoseSetV1};
+use serde::{Deserialize, Serialize};
+use serde_json::json;
+
+use crate::cache::{StageKey, canonical_json};
+use crate::stages::ingest::{IngestSummary, LabelsSummary, hash_files};
+use crate::stages::runner::StageOutput;
+
+/// Version of what this module adds to `desal-bodymodel`: the pose names, the template,
+/// the labels' checks. Bumped when the pose set or labels of a model change.
+pub const MODEL_STAGE_VERSION: u32 = 1;
+
+/// The most positions (samples × vertices) a model source makes: the rig's cap
+/// ([`desal_rig::MAX_POSE_VERTICES`], 2^25, about 2.3 GB of peak memory in `desal run`).
+pub const MAX_POSITIONS: usize = desal_rig::MAX_POSE_VERTICES;
+
+/// `[dataset.model]`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ModelParams {
+    /// The model file (`.npz`, or a `.pkl` read without running pickled code), relative
+    /// to the pipeline file.
+    pub file: String,
+    /// Random shape vectors (betas ~ N(0, 1) per component, clipped to ±2.5). Default 8.
+    #[serde(default = "default_count")]
+    pub shapes: usize,
+    /// Random poses per shape (per joint an axis-angle ~ N(0, σ²) per axis, σ = 0.3 rad
+    /// for body joints, 0.2 for hands, jaw and eyes, and a turn about the up axis).
+    /// Default 8.
+    #[serde(default = "default_count")]
+    pub poses: usize,
+    /// SMPL-X and FLAME: each pose also gets a random expression (N(0, 1) per component).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub expressions: bool,
+    /// Seed of the one random stream.
+    #[serde(default)]
+    pub seed: u64,
+    /// σ (rad) of every joint, replacing the body and hand spreads.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pose_sigma: Option<f64>,
+    /// The labels: dominant skinning joints merged to about this many parts. Default 16.
+    #[serde(default = "default_parts")]
+    pub parts: usize,
+}
+
+fn default_count() -> usize {
+    SampleConfig::default().shapes
+}
+
+fn default_parts() -> usize {
+    16
+}
+
+impl ModelParams {
+    /// The sampler's configuration; the counts checked.
+    pub fn config(&self) -> Result<SampleConfig> {
+        if self.shapes == 0 || self.poses == 0 {
+            bail!("model: shapes and poses must be at least 1 (got {} and {})", self.shapes, self.poses);
+        }
+        if self.parts == 0 {
+            bail!("model: parts must be at least 1");
+        }
+        if let Some(sigma) = self.pose_sigma
+            && !(sigma.is_finite() && sigma >= 0.0)
+        {
+            bail!("model: pose_sigma = {sigma} must be finite and not negative");
+        }
+        let samples = self.shapes.checked_mul(self.poses).and_then(|n| n.checked_add(1));
+        if samples.is_none_or(|n| n > MAX_POSITIONS) {
+            bail!("model: {} shapes × {} poses is more samples than desal makes", self.shapes, self.poses);
+        }
+        Ok(SampleConfig {
+            shapes: self.shapes,
+            poses: self.poses,
+            seed: self.seed,
+            pose_sigma: self.pose_sigma,
+            expressions: self.expressions,
+            ..SampleConfig::default()
+        })
+    }
+}
+
+/// A model dataset's input: the file (absolute) and its table.
+#[derive(Debug, Clone, Copy)]
+pub struct ModelInput<'a> {
+    pub file: &'a Path,
+    pub params: &'a ModelParams,
+}
+
+impl ModelInput<'_> {
+    fn file_hash(&self) -> Result<ContentHash> {
+        Ok(hash_files(&[self.file.to_path_buf()])?[0])
+    }
+
+    /// The ingest key: the model's bytes and every setting of the sampler.
+    pub fn ingest_key(&self) -> Result<StageKey> {
+        let c = self.params.config()?;
+        Ok(StageKey {
+            stage: "model-ingest".into(),
+            stage_version: MODEL_STAGE_VERSION,
+            format_version: ArtifactKind::PoseSet.current_version(),
+            parameters: canonical_json(&json!({
+                "shapes": self.params.shapes,
+                "poses": self.params.poses,
+                "expressions": self.params.expressions,
+                "seed": self.params.seed,
+                "pose_sigma": self.params.pose_sigma,
+            })),
+            resolved: canonical_json(&json!({ "sampler": format!("{c:?}") })),
+            inputs: vec![("model".into(), self.file_hash()?)],
+        })
+    }
+
+    /// The labels key: the model's bytes, the pose set and the part count.
+    pub fn labels_key(&self, poses: ContentHash) -> Result<StageKey> {
+        Ok(StageKey {
+            stage: "model-labels".into(),
+            stage_version: MODEL_STAGE_VERSION,
+            format_version: ArtifactKind::Labels.current_version(),
+            parameters: canonical_json(&json!({ "parts": self.params.parts })),
+            resolved: canonical_json(&json!({ "parts": "dominant-joint, merged by area" })),
+            inputs: vec![("model".into(), self.file_hash()?), ("poses".into(), poses)],
+        })
+    }
+
+    pub fn hints(&self) -> Vec<(String, String)> {
+        vec![("model".into(), crate::stages::ingest::file_name(self.file))]
+    }
+
+    fn load(&self) -> Result<BodyModel> {
+        Ok(BodyModel::read(self.file)?)
+    }
+
+    /// Ingest: the template and every sample, as a pose set (template first).
+    pub fn compute_poses(&self) -> Result<StageOutput<PoseSetV1, IngestSummary>> {
+        let model = self.load()?;
+        let config = self.params.config()?;
+        let samples = 1 + config.shapes * config.poses;
+        if samples.saturating_mul(model.vertex_count()) > MAX_POSITIONS {
+            bail!(
+                "{}: {samples} samples of {} vertices is more than desal's {MAX_POSITIONS} positions; \
+                 ask for fewer shapes or poses",
+                self.file.display(),
+                model.vertex_count()
+            );
+        }
+        let per_shape = config.poses;
+        let mut names = Vec::with_capacity(samples);
+        let mut positions = Vec::with_capacity(samples);
+        for (k, (group, vertices)) in Sampler::new(&model, config)?.enumerate() {
+            names.push(if group == 0 {
+                "template".to_owned()
+            } else {
+                format!("s{:03}-p{:03}", group - 1, (k - 1) % per_shape)
+            });
+            positions.push(vertices.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
+        }
+        let body = PoseSetV1 { names, template: 0, faces: model.faces.clone(), positions };
+        let set = body.to_pose_set().with_context(|| format!("{}", self.file.display()))?;
+        let summary = IngestSummary::of(&set, desal_mesh::FaceCleanup::default());
+        let note = format!(
+            "{} model: {} vertices, {} joints; template + {} shapes × {per_shape} poses",
+            model.kind.name(),
+            model.vertex_count(),
+            model.joint_count(),
+            self.params.shapes
+        );
+        Ok(StageOutput { body, summary, note })
+    }
+
+    /// Labels: the skinning weights' dominant joints, merged to about `parts` parts.
+    pub fn compute_labels(&self, set: &desal_mesh::PoseSet) -> Result<StageOutput<LabelsV1, LabelsSummary>> {
+        let model = self.load()?;
+        if model.vertex_count() != set.vertex_count() {
+            bail!("{}: the model has changed since its pose set was made", self.file.display());
+        }
+        let labels = labels_from_weights(&model, self.params.parts);
+        labels
+            .check_parts_fittable(set.template_positions())
+            .with_context(|| format!("{}: parts from the skinning weights", self.file.display()))?;
+        let sizes: Vec<usize> = labels.members().iter().map(Vec::len).collect();
+        let note = format!(
+            "{} parts from the skinning weights of {} joints, smallest has {} vertices",
+            labels.part_count(),
+            model.joint_count(),
+            sizes.iter().min().unwrap_or(&0)
+        );
+        let summary = LabelsSummary { parts: labels.names.clone(), vertices_per_part: sizes };
+        Ok(StageOutput { body: LabelsV1::from_labels(&labels), summary, note })
+    }
+}
+
+/// A model dataset's file, absolute.
+pub fn model_file(base: &Path, params: &ModelParams) -> PathBuf {
+    base.join(&params.file)
+}
