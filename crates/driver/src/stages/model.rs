@@ -9,7 +9,7 @@
 //! setting. Pose names are `template` and `s<shape>-p<pose>`, so a sample's shape (its
 //! person) can be read from its name.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use desal_bodymodel::{BodyModel, SampleConfig, Sampler, labels_from_weights};
@@ -203,9 +203,4 @@ impl ModelInput<'_> {
         let summary = LabelsSummary { parts: labels.names.clone(), vertices_per_part: sizes };
         Ok(StageOutput { body: LabelsV1::from_labels(&labels), summary, note })
     }
-}
-
-/// A model dataset's file, absolute.
-pub fn model_file(base: &Path, params: &ModelParams) -> PathBuf {
-    base.join(&params.file)
 }
