@@ -176,17 +176,35 @@ fn max_influences_caps_subset_weights_at_the_largest_ones() {
     assert_eq!(figures["max_influences"], 4, "{figures}");
 }
 
+/// Quantised weights that do not sum to 1 load, renormalised, and the run's ingest note
+/// counts them and names the worst vertex (issue 42, item 4); a vertex with no weight at
+/// all fails the run naming the file and the vertex, and writes nothing.
 #[test]
-fn a_rig_with_unnormalised_weights_fails_naming_file_and_vertex_and_writes_nothing() {
+fn a_rig_with_unnormalised_weights_is_renormalised_and_all_zero_fails_naming_the_vertex() {
     let dir = tempfile::tempdir().unwrap();
     let mut rig = read(&sample_rig());
     rig.mesh.influences.weights[0] = 0.25;
     let pipeline =
         write_rig_pipeline(dir.path(), &desal_rig::write_glb(&rig).unwrap(), "target_vertices = 2676");
     let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report = std::fs::read_to_string(dir.path().join("out/avatar/report.json")).unwrap();
+    assert!(
+        report.contains("1 vertices' weights renormalised") && report.contains("worst: vertex 0"),
+        "{report}"
+    );
+
+    let dir = tempfile::tempdir().unwrap();
+    let row = rig.mesh.influences.offsets[0] as usize..rig.mesh.influences.offsets[1] as usize;
+    for w in &mut rig.mesh.influences.weights[row] {
+        *w = 0.0;
+    }
+    let pipeline =
+        write_rig_pipeline(dir.path(), &desal_rig::write_glb(&rig).unwrap(), "target_vertices = 2676");
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
     assert!(!out.status.success());
     let err = stderr(&out);
-    assert!(err.contains("avatar.glb: mesh 'Body' vertex 0: skinning weights sum to"), "{err}");
+    assert!(err.contains("avatar.glb: mesh 'Body' vertex 0: every skinning weight is zero"), "{err}");
     assert!(!dir.path().join("out/avatar").exists(), "no partial output");
 }
 

@@ -39,9 +39,9 @@ pub enum RigError {
     )]
     MorphTargets { path: PathBuf, mesh: String, primitive: usize, targets: usize },
     #[error(
-        "{path}: mesh '{mesh}' vertex {vertex}: skinning weights sum to {sum} (JOINTS_n/WEIGHTS_n), not 1; normalise the weights in the exporter"
+        "{path}: mesh '{mesh}' vertex {vertex}: every skinning weight is zero (JOINTS_n/WEIGHTS_n), so no joint moves it; weight it in the exporter"
     )]
-    WeightsNotNormalised { path: PathBuf, mesh: String, vertex: usize, sum: f64 },
+    NoWeight { path: PathBuf, mesh: String, vertex: usize },
     #[error(
         "{path}: mesh '{mesh}' vertex {vertex}: joint {joint} has weight {weight}, but skin '{skin}' has only {joint_count} joints"
     )]

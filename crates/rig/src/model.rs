@@ -182,6 +182,8 @@ impl SkinnedMesh {
 /// A skinned rig: the scene graph, the skin, the animations and the one skinned mesh.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rig {
+    /// What reading did to the skinning weights (renormalised sums).
+    pub weight_sums: WeightSums,
     pub nodes: Vec<Node>,
     /// Root nodes of each scene.
     pub scenes: Vec<Vec<usize>>,
@@ -192,6 +194,44 @@ pub struct Rig {
     pub skin: Skin,
     pub animations: Vec<Animation>,
     pub mesh: SkinnedMesh,
+}
+
+/// The skinning weights read off 1 and renormalised, as engines renormalise them:
+/// exporters write quantised weights (a sum of 0.996 from 8-bit weights is common).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct WeightSums {
+    /// Vertices whose weights summed further from 1 than
+    /// [`crate::read::WEIGHT_SUM_TOLERANCE`], divided by their sum.
+    pub renormalised: usize,
+    /// Of those, the vertices off by more than [`WEIGHT_SUM_REPORTED`] (2 %).
+    pub off_by_more_than_2pct: usize,
+    /// The vertex whose sum was furthest from 1, and that sum.
+    pub worst: Option<(usize, f64)>,
+}
+
+/// How far from 1 a weight sum must be to be counted in [`WeightSums::off_by_more_than_2pct`].
+pub const WEIGHT_SUM_REPORTED: f64 = 0.02;
+
+impl WeightSums {
+    /// Adds the counts of another primitive's weights.
+    pub fn add(&mut self, other: WeightSums) {
+        self.renormalised += other.renormalised;
+        self.off_by_more_than_2pct += other.off_by_more_than_2pct;
+        if let Some((vertex, sum)) = other.worst
+            && self.worst.is_none_or(|(_, worst)| (sum - 1.0).abs() > (worst - 1.0).abs())
+        {
+            self.worst = Some((vertex, sum));
+        }
+    }
+
+    /// A line for the ingest note, or `None` when no weight was renormalised.
+    pub fn note(&self) -> Option<String> {
+        let (vertex, sum) = self.worst?;
+        Some(format!(
+            "{} vertices' weights renormalised ({} off by more than 2 %; worst: vertex {vertex} summed to {sum})",
+            self.renormalised, self.off_by_more_than_2pct
+        ))
+    }
 }
 
 impl Rig {

@@ -12,7 +12,8 @@
 //! scale channels. Buffers come from the GLB binary chunk, base64 `data:` URIs, or
 //! regular files inside the glTF's own folder ([`desal_io::confine`]). What is refused,
 //! with the file and the element: no skin, an ambiguous skinned mesh, morph targets,
-//! weights that do not sum to 1, weights on joints the skin does not have, non-triangle
+//! all-zero weights (sums off 1 are renormalised and counted in [`Rig::weight_sums`]),
+//! weights on joints the skin does not have, non-triangle
 //! primitives, non-finite values, zero-length rotations, singular inverse bind matrices,
 //! accessors that break the specification. Other meshes, materials, cameras and
 //! extensions are not read (and so not written back).
@@ -25,12 +26,13 @@ use crate::RigError;
 use crate::accessor::{Accessors, Semantic};
 use crate::model::{
     Animation, Channel, Influences, Interpolation, LocalTransform, Node, Path as ChannelPath, Rig, Skin,
-    SkinnedMesh,
+    SkinnedMesh, WEIGHT_SUM_REPORTED, WeightSums,
 };
 
-/// How far a vertex's weights may sum from 1 before the file is refused. Exporters
-/// write `f32` or quantised weights; 1e-3 passes 8-bit normalised weights and catches
-/// weights that were never normalised.
+/// How far a vertex's weights may sum from 1 and be kept as written. A vertex further off
+/// (quantised weights: exporters write 8-bit ones) is divided by its sum, as engines do,
+/// and counted in [`crate::model::WeightSums`]; only negative, non-finite or all-zero
+/// weights are refused.
 pub const WEIGHT_SUM_TOLERANCE: f64 = 1e-3;
 
 /// The shortest rotation quaternion accepted (in a node or a keyframe). glTF requires
@@ -112,13 +114,14 @@ impl Reader<'_> {
         let (mesh_node, mesh, skin) = self.pick_skinned_mesh(options)?;
         let nodes = self.document.nodes().map(|n| self.read_node(&n)).collect::<Result<Vec<_>, _>>()?;
         let skin = self.read_skin(&skin, &nodes)?;
-        let mesh = self.read_mesh(&mesh, &skin)?;
+        let mut weight_sums = WeightSums::default();
+        let mesh = self.read_mesh(&mesh, &skin, &mut weight_sums)?;
         let scenes = self.document.scenes().map(|s| s.nodes().map(|n| n.index()).collect()).collect();
         let scene = self.document.default_scene().map(|s| s.index());
         self.check_keyframe_total()?;
         let animations =
             self.document.animations().map(|a| self.read_animation(&a)).collect::<Result<_, _>>()?;
-        let rig = Rig { nodes, scenes, scene, mesh_node, skin, animations, mesh };
+        let rig = Rig { weight_sums, nodes, scenes, scene, mesh_node, skin, animations, mesh };
         check_tree(&self.path, &rig)?;
         Ok(rig)
     }
@@ -208,7 +211,12 @@ impl Reader<'_> {
         Ok(Skin { name, joints, inverse_bind, skeleton: skin.skeleton().map(|n| n.index()) })
     }
 
-    fn read_mesh(&self, mesh: &gltf::Mesh<'_>, skin: &Skin) -> Result<SkinnedMesh, RigError> {
+    fn read_mesh(
+        &self,
+        mesh: &gltf::Mesh<'_>,
+        skin: &Skin,
+        weight_sums: &mut WeightSums,
+    ) -> Result<SkinnedMesh, RigError> {
         let name = mesh_name(mesh);
         let mut out = SkinnedMesh {
             name: name.clone(),
@@ -292,7 +300,14 @@ impl Reader<'_> {
             if joints.is_empty() {
                 return Err(bad("has no JOINTS_0/WEIGHTS_0: the mesh is not skinned"));
             }
-            self.read_influences(&joints, &weights, base, &name, skin, &mut out.influences)?;
+            weight_sums.add(self.read_influences(
+                &joints,
+                &weights,
+                base,
+                &name,
+                skin,
+                &mut out.influences,
+            )?);
             let indices: Vec<u32> = match primitive.indices() {
                 Some(i) => self.accessors.integers(&i, Semantic::Indices, &used_by)?,
                 None => (0..count as u32).collect(),
@@ -333,7 +348,8 @@ impl Reader<'_> {
         mesh: &str,
         skin: &Skin,
         out: &mut Influences,
-    ) -> Result<(), RigError> {
+    ) -> Result<WeightSums, RigError> {
+        let mut sums = WeightSums::default();
         let count = joints[0].len();
         let skin_name = skin.name.clone().unwrap_or_else(|| "unnamed".into());
         for v in 0..count {
@@ -367,17 +383,27 @@ impl Reader<'_> {
                     row.push((j, w));
                 }
             }
-            if (sum - 1.0).abs() > WEIGHT_SUM_TOLERANCE {
-                return Err(RigError::WeightsNotNormalised {
+            if sum == 0.0 {
+                return Err(RigError::NoWeight {
                     path: self.path.clone(),
                     mesh: mesh.to_owned(),
                     vertex: base + v,
-                    sum,
                 });
+            }
+            let off = (sum - 1.0).abs();
+            if off > WEIGHT_SUM_TOLERANCE {
+                for (_, w) in &mut row {
+                    *w = (f64::from(*w) / sum) as f32;
+                }
+                sums.renormalised += 1;
+                sums.off_by_more_than_2pct += usize::from(off > WEIGHT_SUM_REPORTED);
+                if sums.worst.is_none_or(|(_, worst)| off > (worst - 1.0).abs()) {
+                    sums.worst = Some((base + v, sum));
+                }
             }
             out.push_row(row);
         }
-        Ok(())
+        Ok(sums)
     }
 
     /// A node, its transform finite and its rotation of non-zero length (a zero scale

@@ -79,6 +79,7 @@ fn limb() -> Rig {
     lower_ibm[13] = -1.0;
     let quarter = std::f32::consts::FRAC_PI_4.sin();
     Rig {
+        weight_sums: Default::default(),
         nodes: vec![
             Node { name: Some("upper".into()), children: vec![1], transform: LocalTransform::IDENTITY },
             Node {
@@ -469,13 +470,35 @@ fn several_skinned_meshes_are_named_and_mesh_picks_one() {
     assert!(m.contains("no skinned mesh or node is called 'arm'"), "{m}");
 }
 
+/// Weights off 1 (quantised, as exporters write them) are renormalised and counted, the
+/// worst vertex named; weights within the tolerance are kept as written; a vertex with
+/// no weight at all is refused with the vertex.
 #[test]
-fn weights_that_do_not_sum_to_one_are_refused_with_the_vertex() {
+fn weights_off_one_are_renormalised_and_counted_and_all_zero_is_refused() {
     let mut rig = limb();
-    rig.mesh.influences.weights[7] *= 0.5;
     let v = rig.mesh.influences.offsets.iter().position(|&o| o > 7).unwrap() - 1;
+    let row = rig.mesh.influences.offsets[v] as usize..rig.mesh.influences.offsets[v + 1] as usize;
+    rig.mesh.influences.weights[7] *= 0.5;
+    let sum: f64 = rig.mesh.influences.weights[row.clone()].iter().map(|&w| f64::from(w)).sum();
+    let read_back = read(&write_glb(&rig).unwrap()).unwrap();
+    assert_eq!(read_back.weight_sums.renormalised, 1);
+    assert_eq!(read_back.weight_sums.off_by_more_than_2pct, usize::from((sum - 1.0).abs() > 0.02));
+    assert_eq!(read_back.weight_sums.worst.map(|(vertex, _)| vertex), Some(v));
+    let note = read_back.weight_sums.note().unwrap();
+    assert!(note.contains(&format!("worst: vertex {v} summed to")), "{note}");
+    let renormalised: f64 =
+        read_back.mesh.influences.weights[row.clone()].iter().map(|&w| f64::from(w)).sum();
+    assert!((renormalised - 1.0).abs() < 1e-6, "{renormalised}");
+    // The untouched rig reads as written, with nothing renormalised.
+    let as_written = read(&write_glb(&limb()).unwrap()).unwrap();
+    assert_eq!(as_written.weight_sums, desal_rig::model::WeightSums::default());
+    assert_eq!(as_written.weight_sums.note(), None);
+
+    for w in &mut rig.mesh.influences.weights[row] {
+        *w = 0.0;
+    }
     let m = message(read(&write_glb(&rig).unwrap()));
-    assert!(m.contains(&format!("mesh 'limb' vertex {v}: skinning weights sum to")), "{m}");
+    assert!(m.contains(&format!("mesh 'limb' vertex {v}: every skinning weight is zero")), "{m}");
 }
 
 #[test]

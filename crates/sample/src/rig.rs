@@ -165,6 +165,7 @@ pub fn build_rig(inputs: &RigInputs) -> Result<Rig, SampleError> {
         });
     }
     Ok(Rig {
+        weight_sums: Default::default(),
         nodes,
         scenes: vec![vec![root, mesh_node]],
         scene: Some(0),

@@ -221,6 +221,10 @@ impl RigInput<'_> {
             set.pose_count(),
             set.pose_count() - 1
         );
+        let note = match rig.weight_sums.note() {
+            Some(renormalised) => format!("{note}; {renormalised}"),
+            None => note,
+        };
         Ok(StageOutput { body: PoseSetV1::from_pose_set(set), summary, note })
     }
 
