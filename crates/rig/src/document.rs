@@ -12,6 +12,9 @@
 //!   whose integer attributes [`crate::accessor`] converts) are taken out of
 //!   `extensionsRequired`, which the crate refuses for any extension it does not know.
 //!
+//! - **Compressed meshes** ([`COMPRESSION_EXTENSIONS`]: Draco, meshopt) are refused
+//!   before anything else, with how to decompress the file first.
+//!
 //! - **Structure** ([`crate::structure`]): every reference between elements in range and
 //!   every enumerated value valid, checked here, since the crate's validation misses
 //!   some and panics on others.
@@ -26,6 +29,11 @@ use crate::RigError;
 
 /// Extensions that desal implements, so a file may require them.
 pub const HANDLED_EXTENSIONS: &[&str] = &["KHR_mesh_quantization"];
+
+/// Mesh compression extensions: the data desal would read is in a form it does not
+/// decode, so a file that declares one is refused, saying how to decompress it.
+pub const COMPRESSION_EXTENSIONS: &[&str] =
+    &["KHR_draco_mesh_compression", "EXT_meshopt_compression", "KHR_meshopt_compression"];
 
 /// A parsed, validated glTF file.
 pub struct Parsed {
@@ -55,6 +63,9 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, RigError> {
     let mut value: Value =
         serde_json::from_slice(&json).map_err(|e| gltf_error(gltf::Error::Deserialize(e)))?;
     let extensions = declared_extensions(&value);
+    if let Some(extension) = extensions.iter().find(|e| COMPRESSION_EXTENSIONS.contains(&e.as_str())) {
+        return Err(RigError::Compressed { path: path.to_owned(), extension: extension.clone() });
+    }
     drop_non_object_extras(&mut value);
     drop_application_attributes(&mut value);
     crate::structure::check(path, &value)?;

@@ -12,6 +12,10 @@ pub enum RigError {
     File(#[from] desal_io::IoError),
     #[error("{path}: not a valid glTF 2.0 file: {cause}")]
     Gltf { path: PathBuf, cause: gltf::Error },
+    #[error(
+        "{path}: its meshes are compressed ({extension}), which desal does not decode: decompress it first, e.g. `gltfpack -i IN -o OUT -noq` for meshopt compression, or glTF-Transform for Draco"
+    )]
+    Compressed { path: PathBuf, extension: String },
     /// The `gltf` crate panicked on the file: a gap in desal's checks; report it.
     #[error("{path}: the glTF reader failed on this file ({message}); please report it with the file")]
     Panic { path: PathBuf, message: String },

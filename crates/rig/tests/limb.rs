@@ -501,6 +501,20 @@ fn weights_off_one_are_renormalised_and_counted_and_all_zero_is_refused() {
     assert!(m.contains(&format!("mesh 'limb' vertex {v}: every skinning weight is zero")), "{m}");
 }
 
+/// A file that declares Draco or meshopt compression is refused, naming the extension
+/// and how to decompress it first (issue 42, item 4).
+#[test]
+fn compressed_meshes_are_refused_saying_how_to_decompress() {
+    for extension in ["KHR_draco_mesh_compression", "EXT_meshopt_compression"] {
+        let bytes = edit_json(&write_glb(&limb()).unwrap(), |j| {
+            j["extensionsUsed"] = serde_json::json!([extension]);
+            j["extensionsRequired"] = serde_json::json!([extension]);
+        });
+        let m = message(read(&bytes));
+        assert!(m.contains(&format!("compressed ({extension})")) && m.contains("decompress it first"), "{m}");
+    }
+}
+
 #[test]
 fn a_joint_the_skin_does_not_have_is_refused() {
     let mut rig = limb();
