@@ -126,9 +126,9 @@ pub struct Dataset {
     /// Pose files, sorted (glob) or in the listed order.
     pub pose_files: Vec<PathBuf>,
     pub labels: LabelsSource,
-    /// The rig file of a `[dataset.rig]` dataset, or the model file of a
-    /// `[dataset.model]` one, absolute.
-    pub rig_file: Option<PathBuf>,
+    /// The file the poses are made from instead of pose files, absolute: the rig of a
+    /// `[dataset.rig]` dataset, the model of a `[dataset.model]` one.
+    pub source_file: Option<PathBuf>,
     /// Where this dataset's outputs go.
     pub out_dir: PathBuf,
 }
@@ -146,27 +146,20 @@ impl Dataset {
                 LabelsSource::File(file) => LabelsInput::File(file),
                 LabelsSource::Auto => LabelsInput::Auto(&self.spec.parts),
                 LabelsSource::Rig => LabelsInput::Rig,
-                LabelsSource::Model => match self.model_input() {
-                    Some(model) => LabelsInput::Model(model),
-                    None => unreachable!("a model dataset has its file"),
-                },
+                LabelsSource::Model => LabelsInput::Model,
             },
             fit: &self.spec.fit,
             saliency: &self.spec.saliency,
             simplify: &self.spec.simplify,
             hierarchy: self.spec.hierarchy.as_ref(),
-            rig: match (&self.rig_file, &self.spec.rig) {
+            rig: match (&self.source_file, &self.spec.rig) {
                 (Some(file), Some(params)) => Some(RigInput { file, params }),
                 _ => None,
             },
-            model: self.model_input(),
-        }
-    }
-
-    fn model_input(&self) -> Option<ModelInput<'_>> {
-        match (&self.rig_file, &self.spec.model) {
-            (Some(file), Some(params)) => Some(ModelInput { file, params }),
-            _ => None,
+            model: match (&self.source_file, &self.spec.model) {
+                (Some(file), Some(params)) => Some(ModelInput { file, params }),
+                _ => None,
+            },
         }
     }
 }
@@ -227,7 +220,7 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
             );
         }
         let in_dataset = || format!("{}: dataset '{}'", path.display(), spec.name);
-        let (pose_files, labels, rig_file) = match (&spec.model, &spec.rig, &spec.poses, &spec.labels) {
+        let (pose_files, labels, source_file) = match (&spec.model, &spec.rig, &spec.poses, &spec.labels) {
             (Some(model), None, None, None) => {
                 if spec.template.is_some() || spec.ignore_pose_faces || spec.parts != PartsParams::default() {
                     bail!(
@@ -278,7 +271,7 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
         // Every stage parameter is checked now, before any stage runs.
         check_parameters(&spec, &pose_files).with_context(in_dataset)?;
         let out_dir = out_root.join(&spec.name);
-        datasets.push(Dataset { spec, pose_files, labels, rig_file, out_dir });
+        datasets.push(Dataset { spec, pose_files, labels, source_file, out_dir });
     }
     Ok(Pipeline { path: path.to_owned(), out_root, datasets })
 }

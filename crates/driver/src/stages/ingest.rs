@@ -89,7 +89,7 @@ impl IngestParams<'_> {
 
 /// The labels stage's key: the labels file's bytes, and the pose set they label.
 pub fn labels_key(labels_file: &Path, poses: ContentHash) -> Result<StageKey> {
-    let labels_hash = hash_files(&[labels_file.to_owned()])?[0];
+    let labels_hash = hash_file(labels_file)?;
     Ok(StageKey {
         stage: "labels".into(),
         stage_version: LABELS_VERSION,
@@ -158,13 +158,12 @@ impl IngestSummary {
 
 /// BLAKE3 of each file's bytes, in parallel.
 pub fn hash_files(files: &[PathBuf]) -> Result<Vec<ContentHash>> {
-    files
-        .par_iter()
-        .map(|f| {
-            let bytes = desal_io::file::read_regular_file(f)?;
-            Ok(ContentHash::of(&bytes))
-        })
-        .collect()
+    files.par_iter().map(|f| hash_file(f)).collect()
+}
+
+/// BLAKE3 of one file's bytes (read under the regular-file rule).
+pub fn hash_file(file: &Path) -> Result<ContentHash> {
+    Ok(ContentHash::of(&desal_io::file::read_regular_file(file)?))
 }
 
 /// The pose name of a file: its stem.

@@ -62,8 +62,8 @@ pub enum LabelsInput<'a> {
     Auto(&'a PartsParams),
     /// From the rig of [`DatasetInputs::rig`] (dominant joints).
     Rig,
-    /// From the skinning weights of [`DatasetInputs::model`], this one.
-    Model(model::ModelInput<'a>),
+    /// From the skinning weights of [`DatasetInputs::model`].
+    Model,
 }
 
 /// The stages of one dataset, run or found in the cache. Bodies are decoded lazily, the
@@ -146,29 +146,29 @@ pub fn run_stages(
 
     // Labels: a file validated against the pose set and keyed on its bytes, or parts
     // discovered from the poses and keyed on their parameters and the poses' hash.
-    let (labels, parts_summary) = match (&inputs.rig, inputs.labels) {
-        (None, LabelsInput::Model(model)) => {
+    let (labels, parts_summary) = match (&inputs.rig, &inputs.model, inputs.labels) {
+        (None, Some(model), LabelsInput::Model) => {
             let key = || model.labels_key(poses.hash()?);
             (runner.stage(Stage::Ingest, key, &model.hints(), || model.compute_labels(set()?))?, None)
         }
-        (Some(rig), LabelsInput::Rig) => {
+        (Some(rig), None, LabelsInput::Rig) => {
             let key = || rig.labels_key(poses.hash()?);
             (runner.stage(Stage::Ingest, key, &rig.hints(), || rig.compute_labels(set()?))?, None)
         }
-        (None, LabelsInput::File(file)) => {
+        (None, None, LabelsInput::File(file)) => {
             let key = || ingest::labels_key(file, poses.hash()?);
             let hints = vec![("labels_file".to_owned(), ingest::file_name(file))];
             (runner.stage(Stage::Ingest, key, &hints, || ingest::compute_labels(file, set()?))?, None)
         }
-        (None, LabelsInput::Auto(params)) => {
+        (None, None, LabelsInput::Auto(params)) => {
             let key = || params.key(poses.hash()?);
             let found = runner.stage(Stage::Parts, key, &[], || parts::compute(params, set()?))?;
             let summary = found.summary.clone();
             (found.map_summary(|s| s.labels_summary()), Some(summary))
         }
-        (Some(_), _) | (None, LabelsInput::Rig) => {
-            anyhow::bail!("a rig dataset takes its labels from its rig, and only a rig dataset does")
-        }
+        _ => anyhow::bail!(
+            "a rig or model dataset takes its labels from its rig or model, and only such a dataset does"
+        ),
     };
     let labels_cell = OnceCell::new();
     let part_labels =

@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use crate::cache::{StageKey, canonical_json};
-use crate::stages::ingest::{IngestSummary, LabelsSummary, hash_files};
+use crate::stages::ingest::{IngestSummary, LabelsSummary, hash_file};
 use crate::stages::runner::StageOutput;
 
 /// Version of what this module adds to `desal-bodymodel`: the pose names, the template,
@@ -80,9 +80,15 @@ impl ModelParams {
         {
             bail!("model: pose_sigma = {sigma} must be finite and not negative");
         }
+        // Checked again with the model's vertex count when it is read; a sample has at
+        // least one vertex, so this refuses a count no model can meet before any reading.
         let samples = self.shapes.checked_mul(self.poses).and_then(|n| n.checked_add(1));
         if samples.is_none_or(|n| n > MAX_POSITIONS) {
-            bail!("model: {} shapes × {} poses is more samples than desal makes", self.shapes, self.poses);
+            bail!(
+                "model: {} shapes × {} poses is more than desal's {MAX_POSITIONS} positions at any vertex count",
+                self.shapes,
+                self.poses
+            );
         }
         Ok(SampleConfig {
             shapes: self.shapes,
@@ -104,7 +110,7 @@ pub struct ModelInput<'a> {
 
 impl ModelInput<'_> {
     fn file_hash(&self) -> Result<ContentHash> {
-        Ok(hash_files(&[self.file.to_path_buf()])?[0])
+        hash_file(self.file)
     }
 
     /// The ingest key: the model's bytes and every setting of the sampler.

@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use crate::cache::{StageKey, canonical_json};
-use crate::stages::ingest::{IngestSummary, LabelsSummary, hash_files};
+use crate::stages::ingest::{IngestSummary, LabelsSummary, hash_file};
 use crate::stages::runner::StageOutput;
 
 /// Version of the rig ingest and labels as the driver runs them (with `desal_rig::VERSION`).
@@ -151,7 +151,7 @@ impl RigInput<'_> {
     }
 
     fn file_hash(&self) -> Result<ContentHash> {
-        Ok(hash_files(&[self.file.to_owned()])?[0])
+        hash_file(self.file)
     }
 
     /// The ingest key: the rig's bytes and every setting that shapes the pose set.
@@ -278,7 +278,7 @@ pub fn source_of_pose_set(producer: &Producer, poses: &Path, file: &Path) -> Res
         .iter()
         .find(|i| i.role == "rig")
         .with_context(|| format!("{}: its producer record names no rig", poses.display()))?;
-    let actual = hash_files(&[file.to_owned()])?[0];
+    let actual = hash_file(file)?;
     if actual != recorded.hash {
         bail!(
             "{} is not the rig {} was ingested from (that was '{}', with other bytes)",
