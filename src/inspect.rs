@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::Result;
-use desal_io::artifact::{self, ArtifactKind, LabelsV1, PoseSetV1};
+use desal_io::artifact::{self, ArtifactKind, LabelsV1, PoseSetV2};
 
 /// A human-readable description of the artifact at `path`.
 pub fn describe(path: &Path) -> Result<String> {
@@ -41,7 +41,7 @@ pub fn describe(path: &Path) -> Result<String> {
     writeln!(out, "  summary")?;
     match header.kind {
         ArtifactKind::PoseSet => {
-            let (_, body, _) = artifact::read_artifact::<PoseSetV1>(path)?;
+            let (_, body, _) = artifact::read_artifact::<PoseSetV2>(path)?;
             let set = body.to_pose_set()?;
             let t = set.template_mesh();
             writeln!(
@@ -57,6 +57,9 @@ pub fn describe(path: &Path) -> Result<String> {
                 set.names[set.template],
                 t.diagonal()
             )?;
+            if let Some(groups) = set.group_count() {
+                writeln!(out, "    groups {groups} (held-out figures hold out whole groups)")?;
+            }
         }
         ArtifactKind::Labels => {
             let (_, body, _) = artifact::read_artifact::<LabelsV1>(path)?;

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use desal_io::artifact::{
-    self, FitV1, FloorV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1,
+    self, FitV1, FloorV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV2, SaliencyV1, SimplifiedV1,
 };
 
 use crate::support::desal;
@@ -17,9 +17,14 @@ fn fixture(name: &str) -> std::path::PathBuf {
 /// of the byte format (bincode config, field order, envelope) breaks this test.
 #[test]
 fn frozen_v1_fixtures_still_load() {
-    let (producer, poses, _) = artifact::read_artifact::<PoseSetV1>(&fixture("pose-set-v1.dsa")).unwrap();
+    // Pose set 1 (no groups) is still read, as a pose set without groups.
+    let (producer, poses, _) = artifact::read_artifact::<PoseSetV2>(&fixture("pose-set-v1.dsa")).unwrap();
     assert_eq!(producer.stage, "ingest");
+    assert_eq!(poses, PoseSetV2 { groups: vec![], ..fixture_pose_set() });
+    assert_eq!(poses.to_pose_set().unwrap().groups, None);
+    let (_, poses, _) = artifact::read_artifact::<PoseSetV2>(&fixture("pose-set-v2.dsa")).unwrap();
     assert_eq!(poses, fixture_pose_set());
+    assert_eq!(poses.to_pose_set().unwrap().groups, Some(vec![0, 1]));
     let (_, labels, _) = artifact::read_artifact::<LabelsV1>(&fixture("labels-v1.dsa")).unwrap();
     assert_eq!(labels, LabelsV1 { names: vec!["lower".into(), "upper".into()], labels: vec![0, 0, 1, 1] });
     let (producer, fit, _) = artifact::read_artifact::<FitV1>(&fixture("fit-v1.dsa")).unwrap();
@@ -130,8 +135,8 @@ fn fixture_map() -> MapV1 {
     }
 }
 
-fn fixture_pose_set() -> PoseSetV1 {
-    PoseSetV1 {
+fn fixture_pose_set() -> PoseSetV2 {
+    PoseSetV2 {
         names: vec!["rest".into(), "moved".into()],
         template: 0,
         faces: vec![[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]],
@@ -139,6 +144,7 @@ fn fixture_pose_set() -> PoseSetV1 {
             vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
             vec![[0.5, 0.0, 0.0], [1.5, 0.0, 0.0], [0.5, 1.0, 0.0], [0.5, 0.0, 1.0]],
         ],
+        groups: vec![0, 1],
     }
 }
 
@@ -154,7 +160,8 @@ fn write_fixtures() {
         parameters: "{}".into(),
         inputs: vec![],
     };
-    artifact::write_artifact(&fixture("pose-set-v1.dsa"), &producer, &fixture_pose_set()).unwrap();
+    // Pose set 1 is frozen: pose-set-v1.dsa was written by the pose-set-1 build.
+    artifact::write_artifact(&fixture("pose-set-v2.dsa"), &producer, &fixture_pose_set()).unwrap();
     let labels = LabelsV1 { names: vec!["lower".into(), "upper".into()], labels: vec![0, 0, 1, 1] };
     let producer = artifact::Producer { stage: "labels".into(), ..producer };
     artifact::write_artifact(&fixture("labels-v1.dsa"), &producer, &labels).unwrap();
@@ -182,6 +189,9 @@ fn inspect_describes_an_artifact_and_refuses_a_foreign_file() {
         text.contains("pose-set (format version 1)") && text.contains("poses 2, vertices 4, faces 4"),
         "{text}"
     );
+    let out = desal(&["inspect", fixture("pose-set-v2.dsa").to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("pose-set (format version 2)") && text.contains("groups 2"), "{text}");
     for kind in ["labels", "fit", "saliency", "simplified", "map", "hierarchy-level", "floor"] {
         let out = desal(&["inspect", fixture(&format!("{kind}-v1.dsa")).to_str().unwrap()]);
         let text = String::from_utf8_lossy(&out.stdout);

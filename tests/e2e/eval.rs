@@ -463,10 +463,15 @@ fn desal_refit_moves_vertices_to_where_desal_deforms_worse_than_the_full_mesh() 
         .map(|m| m.positions.iter().map(|x| [x.x as f32, x.y as f32, x.z as f32]).collect())
         .collect();
     let template = names.iter().position(|n| n == "00_rest").unwrap();
-    let set =
-        desal_driver::memory::pose_set(Some(names), positions, meshes[template].faces.clone(), template)
-            .unwrap()
-            .set;
+    let set = desal_driver::memory::pose_set(
+        Some(names),
+        positions,
+        meshes[template].faces.clone(),
+        template,
+        None,
+    )
+    .unwrap()
+    .set;
     let labels = desal_io::labels::read_labels(&data_samples().join("labels.json")).unwrap();
     let library = |target: usize| {
         let mut params = desal_driver::memory::StageParams::default();

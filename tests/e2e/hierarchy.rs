@@ -156,3 +156,41 @@ fn bad_hierarchy_tables_are_refused_when_the_pipeline_is_read() {
         assert!(!dir.path().join("out").exists(), "{to}: nothing written");
     }
 }
+
+/// With `groups`, the held-out figures hold out whole groups: five folds at most (here
+/// four groups besides the template's, so four), every pose outside the template's
+/// group measured once, every fold trained on all the others; a group file that does
+/// not have one id per pose is refused naming it, before anything is written.
+#[test]
+fn groups_hold_out_whole_groups_and_a_wrong_group_file_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = write_pipeline(dir.path(), 625);
+    let text = std::fs::read_to_string(&pipeline)
+        .unwrap()
+        .replace("levels = [2500, 625]", "levels = [1000]")
+        .replace("up_axis = \"y\"\n", "up_axis = \"y\"\ngroups = \"groups.txt\"\n");
+    std::fs::write(&pipeline, text).unwrap();
+    // The sample's 11 poses, the template (00_rest) with 01 in its group, then four groups.
+    let groups = "# one id per pose, in pose order\nrest\nrest\narms\narms\narms\nlegs\nlegs\nlegs\ntorso\ntorso\nhead\n";
+    std::fs::write(dir.path().join("groups.txt"), groups.replace("head\n", "")).unwrap();
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("groups.txt: there are 10 group ids for 11 poses"), "{}", stderr(&out));
+    assert!(!dir.path().join("out").exists(), "nothing written");
+
+    std::fs::write(dir.path().join("groups.txt"), groups).unwrap();
+    run(&pipeline);
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("out/sample/hierarchy.json")).unwrap())
+            .unwrap();
+    assert_eq!(report["heldout_groups"], 5);
+    assert_eq!(report["heldout_folds"], 4);
+    for measure in ["heldout_fitted", "heldout_barycentric"] {
+        let folds = report["steps"][0][measure]["folds"].as_array().unwrap();
+        let measured: Vec<u64> = folds.iter().map(|f| f["measured_poses"].as_u64().unwrap()).collect();
+        assert_eq!(measured, [3, 3, 2, 1], "{measure}: whole groups, in order of first appearance");
+        for f in folds {
+            assert_eq!(f["training_poses"].as_u64().unwrap() + f["measured_poses"].as_u64().unwrap(), 11);
+        }
+    }
+}

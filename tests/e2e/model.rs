@@ -74,10 +74,10 @@ fn a_body_model_is_sampled_and_simplified_with_a_hierarchy() {
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(ran(&report(dir.path())).contains(&"model-ingest".to_owned()));
     let a =
-        desal_io::artifact::decode_artifact::<desal_io::artifact::PoseSetV1>(Path::new("npz"), &npz_poses)
+        desal_io::artifact::decode_artifact::<desal_io::artifact::PoseSetV2>(Path::new("npz"), &npz_poses)
             .unwrap()
             .1;
-    let b = desal_io::artifact::read_artifact::<desal_io::artifact::PoseSetV1>(&body.join("poses.dsa"))
+    let b = desal_io::artifact::read_artifact::<desal_io::artifact::PoseSetV2>(&body.join("poses.dsa"))
         .unwrap()
         .1;
     assert_eq!(a.names, b.names);

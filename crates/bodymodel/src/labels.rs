@@ -23,30 +23,105 @@
 
 use desal_mesh::PartLabels;
 
-use crate::model::BodyModel;
+use desal_mesh::Vec3;
+
+use crate::model::{BodyModel, SparseRows};
 
 /// One part per group of joints, at most `target_parts` of them (one fewer when a mirror
 /// pair merges last; fewer when fewer joints hold vertices). `labels` are in the model's
 /// vertex index space, `names` are root joint names.
 pub fn labels_from_weights(model: &BodyModel, target_parts: usize) -> PartLabels {
-    let joint_count = model.joint_count();
-    let dominant: Vec<usize> = (0..model.vertex_count())
+    let names = model.kind.joint_names();
+    let skin = Skin {
+        rest: &model.v_template,
+        faces: &model.faces,
+        weights: &model.weights,
+        parents: &model.parents,
+        names: &names,
+    };
+    labels_from_skin(&skin, target_parts)
+}
+
+/// What the labels are made from: any skinned mesh's rest positions, triangles, weights
+/// (rows per vertex), joint tree and joint names (a model outside the SMPL family: ANNY,
+/// MHR through body-models).
+#[derive(Debug, Clone, Copy)]
+pub struct Skin<'a> {
+    pub rest: &'a [Vec3],
+    pub faces: &'a [[u32; 3]],
+    pub weights: &'a SparseRows,
+    /// `parents[joint]`: `None` for the root (joint 0) only, else an earlier joint.
+    pub parents: &'a [Option<usize>],
+    pub names: &'a [String],
+}
+
+impl Skin<'_> {
+    /// What [`labels_from_skin`] relies on, checked: one weight row per vertex, weights
+    /// finite and of known joints, one name per joint, a tree rooted at joint 0 whose
+    /// parents come first, faces in range. The error names the element.
+    pub fn check(&self) -> Result<(), String> {
+        let (vertices, joints) = (self.rest.len(), self.parents.len());
+        if joints == 0 || self.names.len() != joints {
+            return Err(format!(
+                "{} joint names for {joints} joints; give one name per joint",
+                self.names.len()
+            ));
+        }
+        if self.weights.row_count() != vertices {
+            return Err(format!("{} weight rows for {vertices} vertices", self.weights.row_count()));
+        }
+        for (j, p) in self.parents.iter().enumerate() {
+            match (j, p) {
+                (0, None) => {}
+                (0, Some(p)) => return Err(format!("joint 0 (the root) has parent {p}; the root has none")),
+                (_, Some(p)) if *p < j => {}
+                (_, p) => {
+                    let p = p.map_or("none".to_owned(), |p| p.to_string());
+                    return Err(format!(
+                        "joint {j} has parent {p}; every joint but the root has an earlier parent"
+                    ));
+                }
+            }
+        }
+        for v in 0..vertices {
+            if let Some((j, w)) = self.weights.row(v).find(|&(j, w)| j >= joints || !w.is_finite()) {
+                return Err(format!("vertex {v} has weight {w} on joint {j} ({joints} joints)"));
+            }
+        }
+        if let Some((f, _)) =
+            self.faces.iter().enumerate().find(|(_, t)| t.iter().any(|&i| i as usize >= vertices))
+        {
+            return Err(format!("face {f} references a vertex out of range ({vertices} vertices)"));
+        }
+        Ok(())
+    }
+}
+
+/// [`labels_from_weights`] for any [`Skin`]. Mirror pairs are found by name:
+/// `left_…`/`right_…`, `l_…`/`r_…` (any case), `….L`/`….R` and `…_l`/`…_r`.
+///
+/// # Panics
+/// When `parents` gives a parent to joint 0, none to another joint, or a later joint as
+/// a parent, or a weight names a joint out of range (callers check the skin first:
+/// [`Skin::check`]).
+pub fn labels_from_skin(skin: &Skin, target_parts: usize) -> PartLabels {
+    let joint_count = skin.parents.len();
+    let dominant: Vec<usize> = (0..skin.rest.len())
         .map(|v| {
-            model
-                .weights
+            skin.weights
                 .row(v)
                 .fold((0, f64::NEG_INFINITY), |best, (j, w)| if w > best.1 { (j, w) } else { best })
                 .0
         })
         .collect();
-    let names = model.kind.joint_names();
-    let mirror = mirror_joints(&names);
+    let names = skin.names;
+    let mirror = mirror_joints(names);
 
     // `part_of[joint]`: the root joint of the part the joint is in.
     let mut part_of: Vec<usize> = (0..joint_count).collect();
     let mut vertices = vec![0usize; joint_count];
     let mut area = vec![0.0f64; joint_count];
-    let vertex_area = vertex_areas(model);
+    let vertex_area = vertex_areas(skin.rest, skin.faces);
     for (v, &j) in dominant.iter().enumerate() {
         vertices[j] += 1;
         area[j] += vertex_area[v];
@@ -69,7 +144,7 @@ pub fn labels_from_weights(model: &BodyModel, target_parts: usize) -> PartLabels
         // An empty part merges alone: its mirror may hold vertices.
         let partner = mirror[part].filter(|&m| alive[m] && !(vertices[part] == 0 && count <= target_parts));
         for joint in std::iter::once(part).chain(partner) {
-            let parent = model.parents[joint].expect("only joint 0 has no parent");
+            let parent = skin.parents[joint].expect("only joint 0 has no parent");
             let into = part_of[parent];
             for p in part_of.iter_mut().filter(|p| **p == joint) {
                 *p = into;
@@ -90,24 +165,36 @@ pub fn labels_from_weights(model: &BodyModel, target_parts: usize) -> PartLabels
     PartLabels::try_new(labels, names).expect("every vertex's part holds it, so it is kept")
 }
 
-/// The `right_…` joint of each `left_…` one and back; `None` for joints without a mirror.
+/// The mirror joint of each joint by name (`left_…` ↔ `right_…`, `l_…` ↔ `r_…` in any
+/// case, `….L` ↔ `….R`, `…_l` ↔ `…_r`); `None` for joints without one.
 fn mirror_joints(names: &[String]) -> Vec<Option<usize>> {
+    const PREFIXES: [(&str, &str); 4] = [("left_", "right_"), ("l_", "r_"), ("L_", "R_"), ("Left", "Right")];
+    const SUFFIXES: [(&str, &str); 3] = [(".L", ".R"), ("_l", "_r"), ("_L", "_R")];
     let find = |name: String| names.iter().position(|n| *n == name);
-    names
-        .iter()
-        .map(|n| match (n.strip_prefix("left_"), n.strip_prefix("right_")) {
-            (Some(rest), _) => find(format!("right_{rest}")),
-            (_, Some(rest)) => find(format!("left_{rest}")),
-            _ => None,
-        })
-        .collect()
+    let other = |n: &str| -> Option<usize> {
+        for (a, b) in PREFIXES {
+            for (from, to) in [(a, b), (b, a)] {
+                if let Some(rest) = n.strip_prefix(from) {
+                    return find(format!("{to}{rest}"));
+                }
+            }
+        }
+        for (a, b) in SUFFIXES {
+            for (from, to) in [(a, b), (b, a)] {
+                if let Some(rest) = n.strip_suffix(from) {
+                    return find(format!("{rest}{to}"));
+                }
+            }
+        }
+        None
+    };
+    names.iter().map(|n| other(n)).collect()
 }
 
 /// Each vertex's share of the rest surface: a third of the area of every triangle at it.
-fn vertex_areas(model: &BodyModel) -> Vec<f64> {
-    let p = &model.v_template;
+fn vertex_areas(p: &[Vec3], faces: &[[u32; 3]]) -> Vec<f64> {
     let mut out = vec![0.0; p.len()];
-    for &[a, b, c] in &model.faces {
+    for &[a, b, c] in faces {
         let (a, b, c) = (a as usize, b as usize, c as usize);
         let third = (p[b] - p[a]).cross(&(p[c] - p[a])).norm() / 6.0;
         for v in [a, b, c] {

@@ -75,6 +75,6 @@ pub mod sample;
 
 pub use error::BodyModelError;
 pub use eval::{Params, PoseItem, Posed, Shaped, rodrigues};
-pub use labels::labels_from_weights;
+pub use labels::{Skin, labels_from_skin, labels_from_weights};
 pub use model::{BodyModel, ExtraEntry, JointClass, ModelKind, SparseRows};
 pub use sample::{Sample, SampleConfig, Sampler};

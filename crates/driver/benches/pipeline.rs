@@ -9,7 +9,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use desal_driver::progress::Lines;
 use desal_driver::run::RunOptions;
 use desal_driver::stages::ingest;
-use desal_io::artifact::{self, PoseSetV1, Producer};
+use desal_io::artifact::{self, PoseSetV2, Producer};
 use desal_mesh::NoProgress;
 
 fn scape_files() -> Option<Vec<PathBuf>> {
@@ -36,10 +36,10 @@ fn bench_ingest(c: &mut Criterion) {
         parameters: "{}".into(),
         inputs: vec![],
     };
-    artifact::write_artifact(&path, &producer, &PoseSetV1::from_pose_set(&set)).unwrap();
+    artifact::write_artifact(&path, &producer, &PoseSetV2::from_pose_set(&set)).unwrap();
     group.bench_function("reload ingested artifact", |b| {
         b.iter(|| {
-            let (_, body, _) = artifact::read_artifact::<PoseSetV1>(&path).unwrap();
+            let (_, body, _) = artifact::read_artifact::<PoseSetV2>(&path).unwrap();
             body.to_pose_set().unwrap()
         });
     });

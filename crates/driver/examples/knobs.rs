@@ -35,7 +35,7 @@ use clap::Parser;
 use desal_driver::pipeline;
 use desal_driver::progress::Lines;
 use desal_driver::run::{RunOptions, run};
-use desal_io::artifact::{LabelsV1, PoseSetV1, SaliencyV1, SimplifiedV1, read_artifact};
+use desal_io::artifact::{LabelsV1, PoseSetV2, SaliencyV1, SimplifiedV1, read_artifact};
 use desal_measures::{SurfaceIndex, VertexIndex, v2f};
 use desal_mesh::{EdgeTopology, TriMesh, Vec3};
 use desal_simplify::{Placement, Simplified, SimplifyConfig, SimplifyInput, StopReason, Target, simplify};
@@ -250,7 +250,7 @@ fn load_dataset(pipeline_file: &Path, work: &Path, rings: usize) -> Result<Datas
     let options = RunOptions { console: std::sync::Arc::new(Lines { quiet: true }), ..RunOptions::default() };
     let reports = run(&pipeline, &options)?;
     let dir = reports.first().context("the pipeline ran no dataset")?.out_dir.clone();
-    let (_, poses, _) = read_artifact::<PoseSetV1>(&dir.join("poses.dsa"))?;
+    let (_, poses, _) = read_artifact::<PoseSetV2>(&dir.join("poses.dsa"))?;
     let (_, labels, _) = read_artifact::<LabelsV1>(&dir.join("labels.dsa"))?;
     let (_, saliency, _) = read_artifact::<SaliencyV1>(&dir.join("saliency.dsa"))?;
     let (_, driver_simplified, _) = read_artifact::<SimplifiedV1>(&dir.join("simplified.dsa"))?;

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use desal_io::artifact::{self, ArtifactBody, FitV1, LabelsV1, PoseSetV1, SaliencyV1};
+use desal_io::artifact::{self, ArtifactBody, FitV1, LabelsV1, PoseSetV2, SaliencyV1};
 use desal_mesh::NoProgress;
 
 use crate::outputs::{FileWriter, write_all_or_nothing};
@@ -147,7 +147,7 @@ fn done(note: &str, output: &Path) {
 }
 
 pub fn fit(args: &FitArgs) -> Result<()> {
-    let (poses, poses_hash) = read::<PoseSetV1>(&args.poses)?;
+    let (poses, poses_hash) = read::<PoseSetV2>(&args.poses)?;
     let (labels, labels_hash) = read::<LabelsV1>(&args.labels)?;
     let set = poses.to_pose_set().with_context(|| format!("{}", args.poses.display()))?;
     let labels = labels.to_labels().with_context(|| format!("{}", args.labels.display()))?;
@@ -163,7 +163,7 @@ pub fn fit(args: &FitArgs) -> Result<()> {
 }
 
 pub fn saliency(args: &SaliencyArgs) -> Result<()> {
-    let (poses, poses_hash) = read::<PoseSetV1>(&args.poses)?;
+    let (poses, poses_hash) = read::<PoseSetV2>(&args.poses)?;
     let (fit, fit_hash) = read::<FitV1>(&args.fit)?;
     let set = poses.to_pose_set().with_context(|| format!("{}", args.poses.display()))?;
     if fit.vertex_count as usize != set.vertex_count()
@@ -220,7 +220,7 @@ pub fn saliency(args: &SaliencyArgs) -> Result<()> {
 }
 
 pub fn map(args: &MapArgs) -> Result<()> {
-    let (producer, poses, poses_hash) = artifact::read_artifact::<PoseSetV1>(&args.poses)?;
+    let (producer, poses, poses_hash) = artifact::read_artifact::<PoseSetV2>(&args.poses)?;
     // Checked before any work: the rig must be the one the pose set came from.
     let rig = match &args.rig {
         Some(file) => Some(stages::rig::source_of_pose_set(&producer, &args.poses, file)?),
@@ -374,7 +374,7 @@ pub struct HierarchyArgs {
 
 pub fn hierarchy(args: &HierarchyArgs) -> Result<()> {
     use stages::hierarchy::{HierarchyParams, HierarchyReport};
-    let (poses, _) = read::<PoseSetV1>(&args.poses)?;
+    let (poses, _) = read::<PoseSetV2>(&args.poses)?;
     let (labels, _) = read::<LabelsV1>(&args.labels)?;
     let set = poses.to_pose_set().with_context(|| format!("{}", args.poses.display()))?;
     let labels = labels.to_labels().with_context(|| format!("{}", args.labels.display()))?;
@@ -395,7 +395,8 @@ pub fn hierarchy(args: &HierarchyArgs) -> Result<()> {
     for level in &summaries {
         eprintln!("{}", level.note());
     }
-    let report = HierarchyReport::new(arrays.levels.clone(), args.upsampler_name(), &summaries);
+    let report =
+        HierarchyReport::new(arrays.levels.clone(), args.upsampler_name(), set.group_count(), &summaries);
     let report = serde_json::to_value(&report)?;
     let mut files: Vec<(PathBuf, FileWriter)> =
         vec![(args.output.clone(), Box::new(move |p| Ok(desal_io::npz::write_hierarchy_npz(p, &arrays)?)))];
@@ -495,7 +496,7 @@ pub struct PartsArgs {
 }
 
 pub fn parts(args: &PartsArgs) -> Result<()> {
-    let (poses, poses_hash) = read::<PoseSetV1>(&args.poses)?;
+    let (poses, poses_hash) = read::<PoseSetV2>(&args.poses)?;
     let set = poses.to_pose_set().with_context(|| format!("{}", args.poses.display()))?;
     let params = stages::parts::PartsParams { count: args.parts, ..Default::default() };
     let key = params.key(poses_hash)?;

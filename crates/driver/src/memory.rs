@@ -3,13 +3,13 @@
 //! and level loop of `desal run` over the [`Memory`] store, without files or the cache.
 //!
 //! **Invariant:** the same arrays give the same bytes as `desal run`. Positions pass
-//! through the pose-set artifact's f32 (`PoseSetV1`), as `desal run`'s do, and the
+//! through the pose-set artifact's f32 (`PoseSetV2`), as `desal run`'s do, and the
 //! stages are chained by the same functions (`stages::chain`, `stages::hierarchy::levels`).
 
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
-use desal_io::artifact::{FitV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1};
+use desal_io::artifact::{FitV1, LabelsV1, MapV1, PoseSetV2, SaliencyV1, SimplifiedV1};
 use desal_io::npz::HierarchyArrays;
 use desal_mesh::validate::clean_faces;
 use desal_mesh::{FaceCleanup, PartLabels, PoseSet, Progress};
@@ -35,7 +35,8 @@ pub struct ArrayPoseSet {
 }
 
 /// Builds a pose set from per-pose positions (`positions[pose][vertex]`), one triangle
-/// list and the template index. Names default to `pose000`, `pose001`, …. Positions are
+/// list and the template index, with one group id per pose or none (held-out figures
+/// then hold out whole groups). Names default to `pose000`, `pose001`, …. Positions are
 /// stored at f32, the precision of the pose-set artifact `desal run` computes from.
 /// Errors name the pose and vertex or face, as ingest's do.
 pub fn pose_set(
@@ -43,6 +44,7 @@ pub fn pose_set(
     positions: Vec<Vec<[f32; 3]>>,
     faces: Vec<[u32; 3]>,
     template: usize,
+    groups: Option<Vec<u32>>,
 ) -> Result<ArrayPoseSet> {
     let poses = positions.len();
     if poses == 0 {
@@ -66,7 +68,13 @@ pub fn pose_set(
         desal_mesh::validate::check_face_indices(&faces, vertices).context("faces")?;
     }
     let (faces, cleanup) = clean_faces(&faces);
-    let body = PoseSetV1 { names, template: template as u32, faces, positions };
+    if let Some(g) = &groups
+        && g.len() != poses
+    {
+        bail!("groups has {} entries but there are {poses} poses; give one group id per pose", g.len());
+    }
+    let body =
+        PoseSetV2 { names, template: template as u32, faces, positions, groups: groups.unwrap_or_default() };
     let set = body.to_pose_set().context("invalid pose set")?;
     Ok(ArrayPoseSet { set, cleanup })
 }
@@ -174,7 +182,7 @@ pub struct RigSimplification {
     /// The simplified rig (`.glb`), the bytes `desal run` writes as `simplified.glb`.
     pub glb: Vec<u8>,
     pub rig: SimplifiedRigSummary,
-    pub ingest: StageOutput<PoseSetV1, IngestSummary>,
+    pub ingest: StageOutput<PoseSetV2, IngestSummary>,
     pub labels: StageOutput<LabelsV1, LabelsSummary>,
     pub stages: Simplification,
 }

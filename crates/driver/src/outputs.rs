@@ -193,7 +193,12 @@ fn add_hierarchy(
     let bodies = stages.hierarchy.iter().map(|l| l.body()).collect::<Result<Vec<_>>>()?;
     let arrays = npz_arrays(set.vertex_count(), &set.faces, &bodies)?;
     let summaries: Vec<_> = stages.hierarchy.iter().map(|l| &l.summary).collect();
-    let report = HierarchyReport::new(arrays.levels.clone(), &bodies[0].upsampler, summaries.iter().copied());
+    let report = HierarchyReport::new(
+        arrays.levels.clone(),
+        &bodies[0].upsampler,
+        set.group_count(),
+        summaries.iter().copied(),
+    );
     let report = serde_json::to_value(&report)?;
     for (k, level) in stages.hierarchy.iter().enumerate() {
         outputs.artifacts.push((format!("hierarchy-{}.dsa", k + 1), level.artifact_path()?.to_owned()));

@@ -61,6 +61,10 @@ pub struct DatasetToml {
     /// Part discovery with `labels = "auto"`: `parts = K`, or a `[dataset.parts]` table.
     #[serde(default, deserialize_with = "crate::stages::parts::count_or_table")]
     pub parts: PartsParams,
+    /// A group file (one group id per pose, in pose order: a person, a capture): held-out
+    /// figures then hold out whole groups. A model source has one group per shape.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub groups: Option<String>,
     /// Use the template's triangles for every pose instead of requiring identical lists.
     #[serde(default)]
     pub ignore_pose_faces: bool,
@@ -129,6 +133,8 @@ pub struct Dataset {
     /// The file the poses are made from instead of pose files, absolute: the rig of a
     /// `[dataset.rig]` dataset, the model of a `[dataset.model]` one.
     pub source_file: Option<PathBuf>,
+    /// The group file (`groups`), absolute.
+    pub groups_file: Option<PathBuf>,
     /// Where this dataset's outputs go.
     pub out_dir: PathBuf,
 }
@@ -141,6 +147,7 @@ impl Dataset {
                 pose_files: &self.pose_files,
                 template: self.spec.template.as_ref(),
                 ignore_pose_faces: self.spec.ignore_pose_faces,
+                groups: self.groups_file.as_deref(),
             },
             labels: match &self.labels {
                 LabelsSource::File(file) => LabelsInput::File(file),
@@ -268,10 +275,18 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
                 )
             }
         };
+        if spec.groups.is_some() && source_file.is_some() {
+            bail!(
+                "{}: `groups` is for pose files; a [dataset.model] has one group per shape, a [dataset.rig] none: \
+                 remove `groups`",
+                in_dataset()
+            );
+        }
+        let groups_file = spec.groups.as_ref().map(|g| base.join(g));
         // Every stage parameter is checked now, before any stage runs.
         check_parameters(&spec, &pose_files).with_context(in_dataset)?;
         let out_dir = out_root.join(&spec.name);
-        datasets.push(Dataset { spec, pose_files, labels, source_file, out_dir });
+        datasets.push(Dataset { spec, pose_files, labels, source_file, groups_file, out_dir });
     }
     Ok(Pipeline { path: path.to_owned(), out_root, datasets })
 }

@@ -32,7 +32,7 @@ use std::path::Path;
 
 use desal_io::artifact::{
     self, ArtifactBody, ArtifactKind, FitV1, FloorV1, HEADER_LEN, HierarchyLevelV1, LabelsV1, MapV1,
-    PoseSetV1, SaliencyV1, SimplifiedV1,
+    PoseSetV2, SaliencyV1, SimplifiedV1,
 };
 use desal_io::npz::HierarchyArrays;
 use rand::{Rng, SeedableRng};
@@ -387,7 +387,7 @@ fn execute_artifact(path: &Path, bytes: &[u8]) -> bool {
     let Ok(header) = artifact::check_envelope(path, bytes) else { return false };
     let _ = artifact::decode_producer(path, bytes);
     match header.kind {
-        ArtifactKind::PoseSet => decoded::<PoseSetV1>(path, bytes, |b| {
+        ArtifactKind::PoseSet => decoded::<PoseSetV2>(path, bytes, |b| {
             let set = b.to_pose_set().expect("a validated pose set converts");
             let _ = set.template_mesh().diagonal();
         }),

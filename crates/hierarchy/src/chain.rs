@@ -40,7 +40,8 @@ pub fn level_poses(
         full.poses.iter().map(|v| gather(v)).collect(),
         faces.to_vec(),
         full.template,
-    )?)
+    )?
+    .with_groups(full.groups.clone())?)
 }
 
 /// The composed upsamplers `U_0`, `U_0 · U_1`, …, one per level of `chain` (so entry k

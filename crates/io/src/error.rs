@@ -64,7 +64,7 @@ pub enum IoError {
 
     /// Written by an older desal whose format this build no longer reads.
     #[error(
-        "{path}: '{kind}' artifact format version {found} is older than this build supports (version {supported}); re-run the stage that produced it to regenerate it"
+        "{path}: '{kind}' artifact format version {found} is older than this build reads (the oldest it reads is version {supported}); re-run the stage that produced it to regenerate it"
     )]
     OlderVersion { path: PathBuf, kind: &'static str, found: u16, supported: u16 },
 

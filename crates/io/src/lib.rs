@@ -14,6 +14,7 @@ pub mod confine;
 pub mod dir;
 pub mod error;
 pub mod file;
+pub mod groups;
 pub mod labels;
 pub mod npz;
 pub mod obj;

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use desal_io::artifact::{self, LabelsV1, PoseSetV1, Producer};
+use desal_io::artifact::{self, LabelsV1, PoseSetV2, Producer};
 use desal_io::ply::{PlyEncoding, PlyWriteOptions, read_ply_full, write_ply};
 use desal_io::{IoError, read_mesh};
 use desal_mesh::{PartLabels, PoseSet, TriMesh, Vec3};
@@ -225,16 +225,16 @@ fn small_pose_set() -> PoseSet {
 fn artifact_round_trips_and_refuses_corruption() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("poses.dsa");
-    let body = PoseSetV1::from_pose_set(&small_pose_set());
+    let body = PoseSetV2::from_pose_set(&small_pose_set());
     let hash = artifact::write_artifact(&path, &producer(), &body).unwrap();
-    let (p, back, h) = artifact::read_artifact::<PoseSetV1>(&path).unwrap();
+    let (p, back, h) = artifact::read_artifact::<PoseSetV2>(&path).unwrap();
     assert_eq!((p, &back, h), (producer(), &body, hash));
     assert_eq!(back.to_pose_set().unwrap(), small_pose_set());
 
     let bytes = std::fs::read(&path).unwrap();
     let refuse = |bytes: &[u8]| {
         std::fs::write(&path, bytes).unwrap();
-        artifact::read_artifact::<PoseSetV1>(&path).unwrap_err()
+        artifact::read_artifact::<PoseSetV2>(&path).unwrap_err()
     };
     let mut wrong_magic = bytes.clone();
     wrong_magic[0] = b'X';

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use desal_io::artifact::{self, FitV1, LabelsV1, MapV1, PoseSetV1, Producer, SaliencyV1, SimplifiedV1};
+use desal_io::artifact::{self, FitV1, LabelsV1, MapV1, PoseSetV2, Producer, SaliencyV1, SimplifiedV1};
 use desal_io::ply::{PlyEncoding, PlyWriteOptions, write_ply};
 use desal_io::{IoError, read_mesh, read_mesh_from};
 use desal_mesh::{TriMesh, Vec3};
@@ -221,18 +221,23 @@ fn d9_decodable_but_inconsistent_bodies_are_refused() {
     map.simp_to_orig[3] = 0;
     refused(&map, "original vertex 0 is mapped to twice");
     // A pose set with one name too few (PoseSet::try_new asserted on it: a panic).
-    let poses = PoseSetV1 {
+    let poses = PoseSetV2 {
         names: vec!["a".into()],
         template: 0,
         faces: vec![[0, 1, 2]],
         positions: vec![vec![[0.0; 3]; 3], vec![[0.0; 3]; 3]],
+        groups: vec![],
     };
     refused(&poses, "names has 1 entries, but there are 2 poses");
-    let poses = PoseSetV1 { names: vec!["a".into(), "b".into()], template: 5, ..poses };
+    refused(
+        &PoseSetV2 { names: vec!["a".into(), "b".into()], groups: vec![0, 1, 1], ..poses.clone() },
+        "groups has 3 entries, but there are 2 poses",
+    );
+    let poses = PoseSetV2 { names: vec!["a".into(), "b".into()], template: 5, ..poses };
     refused(&poses, "template index 5");
     // Empty: `to_pose_set` would refuse it without the path.
     refused(
-        &PoseSetV1 { template: 0, faces: vec![], ..poses },
+        &PoseSetV2 { template: 0, faces: vec![], ..poses },
         "the pose set is empty (3 vertices, 0 faces)",
     );
     refused(&LabelsV1 { names: vec!["a".into()], labels: vec![0, 1] }, "vertex 1 has part id 1");

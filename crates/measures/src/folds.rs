@@ -1,6 +1,8 @@
 //! K-fold splits over poses for held-out evaluation of the deformation model, and the
 //! check of a model's training poses.
 
+use desal_mesh::PoseSet;
+
 use crate::error::EvalError;
 
 /// Splits the non-template poses of a `pose_count`-pose set into `k` test folds.
@@ -24,6 +26,45 @@ pub fn folds(pose_count: usize, template: usize, k: usize) -> Vec<Vec<usize>> {
         folds[i % k].push(pose);
     }
     folds
+}
+
+/// Splits whole groups into `k` test folds: the groups other than the template's, in
+/// order of first appearance, are dealt round-robin (the `i`-th group to fold
+/// `i mod k`), and a fold tests every pose of its groups. The template's group is never
+/// tested (the model is always trained on it), so no pose of a test group is ever in its
+/// fold's training poses. `k` is clamped to `1..=groups - 1`; a pose set whose poses are
+/// all in the template's group yields no folds.
+///
+/// # Panics
+/// When `groups` does not have one id per pose or `template` is out of range.
+pub fn group_folds(groups: &[u32], template: usize, k: usize) -> Vec<Vec<usize>> {
+    let trained = groups[template];
+    let mut order: Vec<u32> = Vec::new();
+    for &g in groups {
+        if g != trained && !order.contains(&g) {
+            order.push(g);
+        }
+    }
+    if order.is_empty() {
+        return Vec::new();
+    }
+    let k = k.clamp(1, order.len());
+    let mut folds = vec![Vec::new(); k];
+    for (pose, g) in groups.iter().enumerate() {
+        if let Some(i) = order.iter().position(|o| o == g) {
+            folds[i % k].push(pose);
+        }
+    }
+    folds
+}
+
+/// The test folds of `set`: over whole groups when it has groups ([`group_folds`]),
+/// over single poses otherwise ([`folds`]).
+pub fn pose_set_folds(set: &PoseSet, k: usize) -> Vec<Vec<usize>> {
+    match &set.groups {
+        Some(groups) => group_folds(groups, set.template, k),
+        None => folds(set.pose_count(), set.template, k),
+    }
 }
 
 /// The complement of `test` in `0..pose_count`, ascending: the training poses of a fold.
@@ -94,5 +135,37 @@ mod tests {
                 prop_assert_eq!(n, u32::from(p != template));
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod group_tests {
+    use super::*;
+
+    /// No group is ever in both a fold's test poses and its training poses, the
+    /// template's group always trains, and every other pose is tested exactly once.
+    #[test]
+    fn no_group_is_in_both_training_and_test() {
+        let groups = [0, 3, 3, 1, 0, 2, 1, 4, 4, 2, 3, 5];
+        for k in 1..8 {
+            let folds = group_folds(&groups, 0, k);
+            assert_eq!(folds.len(), k.min(5), "k = {k}: five groups besides the template's");
+            let mut tested = vec![0; groups.len()];
+            for test in &folds {
+                let train = training_poses(groups.len(), test);
+                for &t in test {
+                    tested[t] += 1;
+                    assert!(
+                        train.iter().all(|&p| groups[p] != groups[t]),
+                        "k = {k}: group {} on both sides",
+                        groups[t]
+                    );
+                }
+                assert!(train.contains(&0) && train.contains(&4), "the template's group trains");
+            }
+            let expected: Vec<usize> = groups.iter().map(|&g| usize::from(g != 0)).collect();
+            assert_eq!(tested, expected, "k = {k}");
+        }
+        assert!(group_folds(&[2, 2, 2], 1, 5).is_empty());
     }
 }

@@ -41,6 +41,10 @@ pub enum MeshError {
     #[error("template index {template} is out of range for {poses} poses")]
     TemplateOutOfRange { template: usize, poses: usize },
 
+    /// The group ids do not cover the poses one to one.
+    #[error("there are {groups} group ids for {poses} poses; give one group id per pose, in pose order")]
+    GroupCountMismatch { groups: usize, poses: usize },
+
     /// The labels do not cover the mesh's vertices one to one.
     #[error(
         "the part labels have {labels} entries but the mesh has {vertices} vertices; give one part id per vertex"

@@ -13,7 +13,7 @@ use crate::mesh::{Face, TriMesh};
 ///
 /// **Invariants:** `names.len() == poses.len() >= 1`; every pose has the same vertex
 /// count; every face index is in range; every coordinate is finite;
-/// `template < poses.len()`.
+/// `template < poses.len()`; `groups`, when present, has one id per pose.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PoseSet {
     /// One name per pose (the file stem), in pose order.
@@ -24,6 +24,10 @@ pub struct PoseSet {
     pub faces: Vec<Face>,
     /// Index of the template pose (the paper's "A" pose) in `poses`.
     pub template: usize,
+    /// One group id per pose (a person, a shape of a body model, a capture), or `None`.
+    /// Held-out figures hold out whole groups, so that no group of a test pose is ever
+    /// seen in training ([`PoseSet::with_groups`]).
+    pub groups: Option<Vec<u32>>,
 }
 
 impl PoseSet {
@@ -58,7 +62,26 @@ impl PoseSet {
             crate::validate::check_finite(pose, name)?;
         }
         crate::validate::check_face_indices(&faces, expected)?;
-        Ok(Self { names, poses, faces, template })
+        Ok(Self { names, poses, faces, template, groups: None })
+    }
+
+    /// The same poses with one group id per pose (`None`: no groups).
+    pub fn with_groups(self, groups: Option<Vec<u32>>) -> Result<Self, MeshError> {
+        if let Some(g) = &groups
+            && g.len() != self.pose_count()
+        {
+            return Err(MeshError::GroupCountMismatch { groups: g.len(), poses: self.pose_count() });
+        }
+        Ok(Self { groups, ..self })
+    }
+
+    /// How many distinct groups the poses fall in (`None` without groups).
+    pub fn group_count(&self) -> Option<usize> {
+        let groups = self.groups.as_ref()?;
+        let mut ids = groups.clone();
+        ids.sort_unstable();
+        ids.dedup();
+        Some(ids.len())
     }
 
     pub fn pose_count(&self) -> usize {
@@ -96,6 +119,7 @@ impl PoseSet {
                 .iter()
                 .position(|&p| p == self.template)
                 .expect("the template is among the kept poses"),
+            groups: self.groups.as_ref().map(|g| kept.iter().map(|&p| g[p]).collect()),
         })
     }
 
@@ -139,5 +163,16 @@ mod tests {
         assert_eq!(sub.template, 1);
         assert_eq!(sub.faces, set.faces);
         assert!(matches!(set.subset(&[0, 1, 2]), Cow::Borrowed(s) if std::ptr::eq(s, &set)));
+    }
+
+    /// Groups are one per pose, counted by distinct id, and move with a subset.
+    #[test]
+    fn groups_are_one_per_pose_and_follow_a_subset() {
+        let err = three().with_groups(Some(vec![0, 1])).unwrap_err();
+        assert_eq!(err, MeshError::GroupCountMismatch { groups: 2, poses: 3 });
+        let set = three().with_groups(Some(vec![7, 3, 7])).unwrap();
+        assert_eq!(set.group_count(), Some(2));
+        assert_eq!(set.subset(&[1, 2]).groups, Some(vec![3, 7]));
+        assert_eq!(three().group_count(), None);
     }
 }

@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use desal_io::artifact::{
-    ArtifactBody, ArtifactKind, FitV1, FloorV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1,
+    ArtifactBody, ArtifactKind, FitV1, FloorV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV2, SaliencyV1,
     SimplifiedV1, read_artifact, read_producer,
 };
 use desal_io::npz::{HierarchyArrays, NamedArray, NpyArray, NpyData};
@@ -23,7 +23,7 @@ use crate::errors::{self, InputError};
 pub fn load<'py>(py: Python<'py>, path: &Path) -> PyResult<Bound<'py, PyDict>> {
     let (header, _) = read_producer(path).map_err(|e| errors::input(e.into()))?;
     let (producer, body) = py.detach(|| match header.kind {
-        ArtifactKind::PoseSet => body::<PoseSetV1>(path),
+        ArtifactKind::PoseSet => body::<PoseSetV2>(path),
         ArtifactKind::Labels => body::<LabelsV1>(path),
         ArtifactKind::Fit => body::<FitV1>(path),
         ArtifactKind::Saliency => body::<SaliencyV1>(path),

@@ -85,7 +85,7 @@ struct PyPoseSet {
 #[pymethods]
 impl PyPoseSet {
     #[new]
-    #[pyo3(signature = (poses, faces, labels=None, template=None, names=None, part_names=None, parts=None, progress=None))]
+    #[pyo3(signature = (poses, faces, labels=None, template=None, names=None, part_names=None, parts=None, progress=None, groups=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -97,18 +97,21 @@ impl PyPoseSet {
         part_names: Option<&Bound<'_, PyAny>>,
         parts: Option<&Bound<'_, PyAny>>,
         progress: Option<Py<PyAny>>,
+        groups: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         guard("PoseSet", || {
             let positions = convert::poses(poses)?;
             let faces = convert::faces("faces", faces)?;
             let ids = labels.map(|l| convert::ids("labels", l)).transpose()?;
+            let groups = groups.map(|g| convert::ids("groups", g)).transpose()?;
             let template = template.map(|t| args::index("template", t)).transpose()?.unwrap_or(0);
             let names = names.map(|n| args::strings("names", n)).transpose()?;
             let part_names = part_names.map(|n| args::strings("part_names", n)).transpose()?;
             let parts = parts.map(parts_json).transpose()?;
             let parts: PartsParams = table("parts", parts.as_deref())?;
             detached(py, progress, move |_| {
-                let built = memory::pose_set(names, positions, faces, template).map_err(errors::input)?;
+                let built =
+                    memory::pose_set(names, positions, faces, template, groups).map_err(errors::input)?;
                 let set = built.set;
                 let (labels, parts) = match ids {
                     Some(ids) => (memory::labels(ids, part_names, &set).map_err(errors::input)?, None),
@@ -121,6 +124,91 @@ impl PyPoseSet {
                 let removed_faces = (built.cleanup.degenerate.len(), built.cleanup.duplicate.len());
                 let digest = content_digest(&set, &labels);
                 Ok(PyPoseSet { set, labels, digest, parts, removed_faces })
+            })
+        })
+    }
+
+    /// PoseSet.from_body_model(model, shapes=24, poses=6, seed=0, pose_sigma=None,
+    ///     expressions=True, parts=16, progress=None)
+    ///
+    /// Samples a body-models model (SMPL, SMPL-H, SMPL-X, MANO, FLAME, ANNY, ...; its
+    /// NumPy backend, no torch) into a pose set: the template (the mean shape in the zero
+    /// pose) then `shapes` x `poses` samples, one group per shape (held-out figures hold
+    /// out whole shapes), labels from the skin weights' dominant joints merged to about
+    /// `parts` parts. The draw is documented in `desal._body_models`.
+    #[classmethod]
+    #[pyo3(signature = (model, shapes=24, poses=6, seed=0, pose_sigma=None, expressions=true, parts=16, progress=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn from_body_model(
+        _cls: &Bound<'_, pyo3::types::PyType>,
+        py: Python<'_>,
+        model: &Bound<'_, PyAny>,
+        shapes: usize,
+        poses: usize,
+        seed: u64,
+        pose_sigma: Option<f64>,
+        expressions: bool,
+        parts: usize,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Self> {
+        guard("PoseSet.from_body_model", || {
+            if parts == 0 {
+                return Err(convert::bad("parts", "must be at least 1"));
+            }
+            let callback = args::progress(progress, py)?;
+            let sampled = py.import("desal._body_models")?.call_method1(
+                "sample",
+                (
+                    model,
+                    shapes,
+                    poses,
+                    seed,
+                    pose_sigma,
+                    expressions,
+                    callback.as_ref().map(|c| c.clone_ref(py)),
+                ),
+            )?;
+            let item = |key: &str| sampled.get_item(key);
+            let positions = convert::poses(&item("poses")?)?;
+            let faces = convert::faces("faces", &item("faces")?)?;
+            let names = args::strings("names", &item("names")?)?;
+            let groups = convert::ids("groups", &item("groups")?)?;
+            let rest: Vec<desal_mesh::Vec3> = convert::points_f64("rest", &item("rest")?)?
+                .into_iter()
+                .map(|[x, y, z]| desal_mesh::Vec3::new(x, y, z))
+                .collect();
+            let weights = item("weights")?;
+            let shape: Vec<usize> = weights.getattr("shape")?.extract()?;
+            let [vertices, joints] = shape[..] else {
+                return Err(convert::bad(
+                    "skin_weights",
+                    format!("must have shape (vertices, joints), not {shape:?}"),
+                ));
+            };
+            let dense = convert::values_f64("skin_weights", &weights.call_method0("ravel")?)?;
+            let weights = desal_bodymodel::SparseRows::from_dense(&dense, vertices, joints);
+            let parents: Vec<Option<usize>> = convert::indices("parents", &item("parents")?, true)?
+                .into_iter()
+                .map(|p| p.map(|p| p as usize))
+                .collect();
+            let joint_names = args::strings("joint_names", &item("joint_names")?)?;
+            let skin = desal_bodymodel::Skin {
+                rest: &rest,
+                faces: &faces,
+                weights: &weights,
+                parents: &parents,
+                names: &joint_names,
+            };
+            skin.check().map_err(|e| errors::input(anyhow::anyhow!("the model's skin: {e}")))?;
+            let labels = desal_bodymodel::labels_from_skin(&skin, parts);
+            detached(py, None, move |_| {
+                let built = memory::pose_set(Some(names), positions, faces, 0, Some(groups))
+                    .map_err(errors::input)?;
+                let set = built.set;
+                labels.check_vertex_count(set.vertex_count()).map_err(|e| errors::input(e.into()))?;
+                let removed_faces = (built.cleanup.degenerate.len(), built.cleanup.duplicate.len());
+                let digest = content_digest(&set, &labels);
+                Ok(PyPoseSet { set, labels, digest, parts: None, removed_faces })
             })
         })
     }
@@ -156,6 +244,13 @@ impl PyPoseSet {
     #[getter]
     fn template(&self) -> usize {
         self.set.template
+    }
+
+    /// Group id per pose, (poses,) int64, or None: held-out figures hold out whole groups.
+    #[getter]
+    fn groups<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
+        let groups = self.set.groups.as_ref()?;
+        Some(convert::index_array(py, groups.iter().copied()).into_any())
     }
 
     #[getter]

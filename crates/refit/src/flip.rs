@@ -251,6 +251,7 @@ mod tests {
             poses: vec![flat, bent],
             faces: vec![[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]],
             template: 0,
+            groups: None,
         };
         (truth, vec![[0, 1, 2], [0, 2, 3]])
     }

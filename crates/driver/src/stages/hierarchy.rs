@@ -9,7 +9,10 @@
 //!
 //! Each level's summary also holds the held-out upsampling error (m²) of the fitted and
 //! the barycentric U, composed to full resolution: [`HELDOUT_FOLDS`] folds by pose index,
-//! U of every level up to this one refitted on each fold's training poses only.
+//! or, when the pose set has groups, up to [`GROUP_FOLDS`] folds over whole groups (no
+//! group of a measured pose is among its fold's training poses); U of every level up to
+//! this one refitted on each fold's training poses only. The levels' kept vertices are
+//! chosen once, from every pose.
 //!
 //! Index spaces: `fine_idx` (level k), `coarse_idx` (level k+1), `orig_idx` (level 0).
 
@@ -34,6 +37,10 @@ use crate::stages::simplify::SimplifyParams;
 /// Folds of the held-out upsampling error: fold `f` measures the poses with
 /// `index % HELDOUT_FOLDS == f` and fits on the others (even/odd, as the crate measured).
 pub const HELDOUT_FOLDS: usize = 2;
+
+/// Folds of the held-out upsampling error over a pose set with groups: k-fold over whole
+/// groups, k = min(5, groups − 1).
+pub const GROUP_FOLDS: usize = 5;
 
 /// `upsampler` in `[dataset.hierarchy]`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -435,6 +442,19 @@ pub fn compute_level(
     Ok(StageOutput { body, summary, note })
 }
 
+/// The poses each fold of the held-out upsampling error measures (the others train):
+/// with groups, whole groups ([`GROUP_FOLDS`] folds at most, the template's group always
+/// training: `desal_measures::group_folds`); without, [`HELDOUT_FOLDS`] folds by pose
+/// index.
+pub fn heldout_folds(full: &PoseSet) -> Vec<Vec<usize>> {
+    match &full.groups {
+        Some(groups) => desal_measures::group_folds(groups, full.template, GROUP_FOLDS),
+        None => (0..HELDOUT_FOLDS)
+            .map(|f| (0..full.pose_count()).filter(|p| p % HELDOUT_FOLDS == f).collect())
+            .collect(),
+    }
+}
+
 /// The held-out upsampling error of the last level of `chain` with each of `upsamplers`,
 /// composed to full resolution: per fold ([`HELDOUT_FOLDS`], by pose index), every
 /// level's U refitted on that fold's training poses, all upsamplers measured on the
@@ -464,9 +484,8 @@ fn heldout<const N: usize>(
     }
     let mut folds: [Vec<FoldError>; N] = std::array::from_fn(|_| Vec::new());
     let mut vertex_sums: [Vec<f64>; N] = std::array::from_fn(|_| vec![0.0; full.vertex_count()]);
-    for fold in 0..HELDOUT_FOLDS {
-        let mask: Vec<bool> = (0..full.pose_count()).map(|p| all[p] && p % HELDOUT_FOLDS != fold).collect();
-        let measured: Vec<usize> = (0..full.pose_count()).filter(|p| p % HELDOUT_FOLDS == fold).collect();
+    for (fold, measured) in heldout_folds(full).into_iter().enumerate() {
+        let mask: Vec<bool> = (0..full.pose_count()).map(|p| all[p] && !measured.contains(&p)).collect();
         if measured.is_empty() {
             continue;
         }
@@ -518,14 +537,20 @@ pub struct HierarchyReport<'a> {
     /// Vertex count of each level, level 0 first.
     pub levels: Vec<usize>,
     pub upsampler: &'a str,
+    /// Folds of the held-out figures (the first step's).
     pub heldout_folds: usize,
+    /// The pose set's group count when the folds hold out whole groups.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heldout_groups: Option<usize>,
     pub steps: Vec<LevelSummary>,
 }
 
 impl<'a> HierarchyReport<'a> {
+    /// `groups`: the pose set's group count, when it has groups.
     pub fn new<'s>(
         levels: Vec<usize>,
         upsampler: &'a str,
+        groups: Option<usize>,
         steps: impl IntoIterator<Item = &'s LevelSummary>,
     ) -> Self {
         let steps = steps
@@ -536,8 +561,9 @@ impl<'a> HierarchyReport<'a> {
                 s.heldout_barycentric.vertex_mse.clear();
                 s
             })
-            .collect();
-        Self { levels, upsampler, heldout_folds: HELDOUT_FOLDS, steps }
+            .collect::<Vec<LevelSummary>>();
+        let heldout_folds = steps.first().map_or(HELDOUT_FOLDS, |s| s.heldout_fitted.folds.len());
+        Self { levels, upsampler, heldout_folds, heldout_groups: groups, steps }
     }
 }
 

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use desal_io::ContentHash;
-use desal_io::artifact::{ArtifactKind, LabelsV1, PoseSetV1};
+use desal_io::artifact::{ArtifactKind, LabelsV1, PoseSetV2};
 use desal_mesh::validate::{check_same_faces, clean_faces};
 use desal_mesh::{Face, FaceCleanup};
 use desal_mesh::{PartLabels, PoseSet, Progress, TriMesh};
@@ -42,13 +42,16 @@ pub struct IngestParams<'a> {
     pub template: Option<&'a TemplateSpec>,
     /// Use the template's triangles for every pose instead of requiring identical lists.
     pub ignore_pose_faces: bool,
+    /// The group file (`groups`): one group id per pose.
+    pub groups: Option<&'a Path>,
 }
 
 impl IngestParams<'_> {
     /// The cache key: the bytes of every pose file (never their paths), the pose names,
-    /// the resolved template index.
+    /// the resolved template index, the group file's bytes.
     pub fn key(&self) -> Result<(StageKey, usize)> {
         let file_hashes = hash_files(self.pose_files)?;
+        let groups = self.groups.map(hash_file).transpose()?;
         let template = resolve_template(self.pose_files, self.template)?;
         let names: Vec<String> = self.pose_files.iter().map(|f| pose_name(f)).collect();
         let parameters = canonical_json(&json!({
@@ -62,14 +65,20 @@ impl IngestParams<'_> {
             format_version: ArtifactKind::PoseSet.current_version(),
             resolved: parameters.clone(),
             parameters,
-            inputs: file_hashes.iter().enumerate().map(|(k, h)| (format!("pose[{k}]"), *h)).collect(),
+            inputs: file_hashes
+                .iter()
+                .enumerate()
+                .map(|(k, h)| (format!("pose[{k}]"), *h))
+                .chain(groups.map(|h| ("groups".to_owned(), h)))
+                .collect(),
         };
         Ok((key, template))
     }
 
     /// Human-readable names of the key's inputs (file names only: paths never reach a key).
     pub fn hints(&self) -> Vec<(String, String)> {
-        self.pose_files.iter().enumerate().map(|(k, f)| (format!("pose[{k}]"), file_name(f))).collect()
+        let poses = self.pose_files.iter().enumerate().map(|(k, f)| (format!("pose[{k}]"), file_name(f)));
+        poses.chain(self.groups.map(|g| ("groups".to_owned(), file_name(g)))).collect()
     }
 
     /// Reads and validates the pose files as a stage output.
@@ -77,13 +86,24 @@ impl IngestParams<'_> {
         &self,
         template: usize,
         progress: &dyn Progress,
-    ) -> Result<StageOutput<PoseSetV1, IngestSummary>> {
+    ) -> Result<StageOutput<PoseSetV2, IngestSummary>> {
         let (set, summary) = ingest_poses(self.pose_files, template, self.ignore_pose_faces, progress)?;
-        let note = format!(
+        let (summary, set) = match self.groups {
+            Some(file) => {
+                let groups = desal_io::groups::read_groups(file, set.pose_count())?;
+                let set = set.with_groups(Some(groups))?;
+                (IngestSummary { groups: set.group_count(), ..summary }, set)
+            }
+            None => (summary, set),
+        };
+        let mut note = format!(
             "{} poses x {} vertices, {} faces, template {}",
             summary.poses, summary.vertices, summary.faces, summary.template
         );
-        Ok(StageOutput { body: PoseSetV1::from_pose_set(&set), summary, note })
+        if let Some(groups) = summary.groups {
+            note += &format!(", {groups} groups");
+        }
+        Ok(StageOutput { body: PoseSetV2::from_pose_set(&set), summary, note })
     }
 }
 
@@ -136,6 +156,9 @@ pub struct IngestSummary {
     pub bbox_min: [f64; 3],
     pub bbox_max: [f64; 3],
     pub diagonal: f64,
+    /// How many groups the poses fall in, when they have groups.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub groups: Option<usize>,
 }
 
 impl IngestSummary {
@@ -152,6 +175,7 @@ impl IngestSummary {
             bbox_min: lo.into(),
             bbox_max: hi.into(),
             diagonal: (hi - lo).norm(),
+            groups: set.group_count(),
         }
     }
 }

@@ -24,7 +24,7 @@ use std::path::Path;
 
 use anyhow::Result;
 use desal_io::artifact::{
-    ArtifactKind, FitV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV1, SaliencyV1, SimplifiedV1,
+    ArtifactKind, FitV1, HierarchyLevelV1, LabelsV1, MapV1, PoseSetV2, SaliencyV1, SimplifiedV1,
 };
 use desal_mesh::{PartLabels, PoseSet, Progress};
 
@@ -70,7 +70,7 @@ pub enum LabelsInput<'a> {
 /// pose set and labels at most once.
 #[derive(Debug)]
 pub struct DatasetStages {
-    pub poses: Staged<PoseSetV1, IngestSummary>,
+    pub poses: Staged<PoseSetV2, IngestSummary>,
     pub labels: Staged<LabelsV1, LabelsSummary>,
     /// The discovery's figures when the labels are `auto` (`parts.json`).
     pub parts: Option<PartsSummary>,

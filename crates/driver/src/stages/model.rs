@@ -13,7 +13,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use desal_bodymodel::{BodyModel, SampleConfig, Sampler, labels_from_weights};
-use desal_io::artifact::{ArtifactKind, ContentHash, LabelsV1, PoseSetV1};
+use desal_io::artifact::{ArtifactKind, ContentHash, LabelsV1, PoseSetV2};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
@@ -153,7 +153,7 @@ impl ModelInput<'_> {
     }
 
     /// Ingest: the template and every sample, as a pose set (template first).
-    pub fn compute_poses(&self) -> Result<StageOutput<PoseSetV1, IngestSummary>> {
+    pub fn compute_poses(&self) -> Result<StageOutput<PoseSetV2, IngestSummary>> {
         let model = self.load()?;
         let config = self.params.config()?;
         let samples = 1 + config.shapes * config.poses;
@@ -168,7 +168,9 @@ impl ModelInput<'_> {
         let per_shape = config.poses;
         let mut names = Vec::with_capacity(samples);
         let mut positions = Vec::with_capacity(samples);
+        let mut groups = Vec::with_capacity(samples);
         for (k, (group, vertices)) in Sampler::new(&model, config)?.enumerate() {
+            groups.push(group as u32);
             names.push(if group == 0 {
                 "template".to_owned()
             } else {
@@ -176,7 +178,7 @@ impl ModelInput<'_> {
             });
             positions.push(vertices.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
         }
-        let body = PoseSetV1 { names, template: 0, faces: model.faces.clone(), positions };
+        let body = PoseSetV2 { names, template: 0, faces: model.faces.clone(), positions, groups };
         let set = body.to_pose_set().with_context(|| format!("{}", self.file.display()))?;
         let summary = IngestSummary::of(&set, desal_mesh::FaceCleanup::default());
         let note = format!(

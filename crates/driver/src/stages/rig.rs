@@ -1,7 +1,7 @@
 //! Rig datasets (`[dataset.rig]`): a skinned glTF 2.0 file in place of pose files and a
 //! labels file. Ingest reads the rig, samples its frames (the animations, seeded random
 //! joint rotations, or both), poses the welded mesh by linear blend skinning and yields
-//! the same `PoseSetV1` artifact as pose files do (pose 0, the template, is the bind
+//! the same `PoseSetV2` artifact as pose files do (pose 0, the template, is the bind
 //! pose); the labels stage gives each welded vertex its heaviest joint, small parts
 //! merged into the parent (`parts = "dominant-joint"`), as a `LabelsV1`. So fit,
 //! saliency, simplify and map never know the poses came from a rig. `outputs.rs` then
@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use desal_io::ContentHash;
-use desal_io::artifact::{ArtifactKind, LabelsV1, MapV1, PoseSetV1, Producer, SimplifiedV1};
+use desal_io::artifact::{ArtifactKind, LabelsV1, MapV1, PoseSetV2, Producer, SimplifiedV1};
 use desal_rig::{FrameConfig, PoseSource, PosedRig, ReadOptions, Rig};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
@@ -208,7 +208,7 @@ impl RigInput<'_> {
     }
 
     /// Ingest: the posed, welded rig as a pose set.
-    pub fn compute_poses(&self) -> Result<StageOutput<PoseSetV1, IngestSummary>> {
+    pub fn compute_poses(&self) -> Result<StageOutput<PoseSetV2, IngestSummary>> {
         let (rig, posed) = self.load()?;
         let set = &posed.poses;
         let summary = IngestSummary::of(set, desal_mesh::FaceCleanup::default());
@@ -225,7 +225,7 @@ impl RigInput<'_> {
             Some(renormalised) => format!("{note}; {renormalised}"),
             None => note,
         };
-        Ok(StageOutput { body: PoseSetV1::from_pose_set(set), summary, note })
+        Ok(StageOutput { body: PoseSetV2::from_pose_set(set), summary, note })
     }
 
     /// Labels: each welded vertex's heaviest joint, small parts merged into the parent.

@@ -80,8 +80,21 @@ impl ArtifactKind {
     }
 
     /// The format version this build writes and reads for this kind.
+    /// Pose set 2: one group id per pose (`PoseSetV2::groups`, empty for none).
     pub fn current_version(self) -> u16 {
-        1
+        match self {
+            ArtifactKind::PoseSet => 2,
+            _ => 1,
+        }
+    }
+
+    /// The oldest format version this build still reads for this kind (an older body is
+    /// decoded by [`ArtifactBody::decode_older`] and brought to the current layout).
+    pub fn oldest_readable_version(self) -> u16 {
+        match self {
+            ArtifactKind::PoseSet => 1,
+            _ => self.current_version(),
+        }
     }
 
     fn from_code(code: u16) -> Option<Self> {
@@ -186,6 +199,12 @@ pub trait ArtifactBody: Serialize + DeserializeOwned {
     /// code using a decoded body may index it without checks. Returns the first
     /// inconsistency, naming the field and the offending entry. Run by every decode.
     fn validate(&self) -> Result<(), String>;
+
+    /// Decodes the payload (producer and body) of a readable older format `version`
+    /// (`KIND.oldest_readable_version()` up to the current one) into the current layout.
+    fn decode_older(version: u16, _payload: &[u8]) -> Result<(Producer, Self), String> {
+        Err(format!("format version {version} of {} has no reader", Self::KIND.name()))
+    }
 }
 
 /// The fixed header of an artifact, as read.
@@ -278,8 +297,13 @@ pub fn decode_artifact<T: ArtifactBody>(
     bytes: &[u8],
 ) -> Result<(Producer, T, ContentHash), IoError> {
     let header = check_artifact::<T>(path, bytes)?;
-    let (producer, body): (Producer, T) = codec::decode(&bytes[HEADER_LEN..])
-        .map_err(|reason| IoError::Decode { path: path.to_owned(), reason })?;
+    let payload = &bytes[HEADER_LEN..];
+    let decoded = match header.version < T::KIND.current_version() {
+        true => T::decode_older(header.version, payload),
+        false => codec::decode(payload),
+    };
+    let (producer, body): (Producer, T) =
+        decoded.map_err(|reason| IoError::Decode { path: path.to_owned(), reason })?;
     body.validate().map_err(|reason| IoError::InvalidArtifact {
         path: path.to_owned(),
         kind: T::KIND.name(),
@@ -332,12 +356,12 @@ fn check_version(path: &Path, header: &ArtifactHeader) -> Result<(), IoError> {
             supported,
         });
     }
-    if header.version < supported {
+    if header.version < header.kind.oldest_readable_version() {
         return Err(IoError::OlderVersion {
             path: path.to_owned(),
             kind: header.kind.name(),
             found: header.version,
-            supported,
+            supported: header.kind.oldest_readable_version(),
         });
     }
     Ok(())

@@ -10,24 +10,46 @@ use desal_mesh::math::{vec3_from_f32, vec3_to_f32};
 use desal_mesh::{MeshError, PartLabels, PoseSet};
 use serde::{Deserialize, Serialize};
 
-use super::{ArtifactBody, ArtifactKind};
+use super::{ArtifactBody, ArtifactKind, Producer};
 
 /// A validated pose set. Positions are stored as f32 (the precision of the source files).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct PoseSetV1 {
+pub struct PoseSetV2 {
     pub names: Vec<String>,
     pub template: u32,
     pub faces: Vec<[u32; 3]>,
     /// `positions[pose][vertex]`.
     pub positions: Vec<Vec<[f32; 3]>>,
+    /// One group id per pose (`PoseSet::groups`), or empty for none.
+    pub groups: Vec<u32>,
 }
 
-impl ArtifactBody for PoseSetV1 {
+/// Format version 1 of the pose set, frozen: [`PoseSetV2`] without groups. Read only,
+/// by [`PoseSetV2`]'s `decode_older`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PoseSetV1 {
+    pub names: Vec<String>,
+    pub template: u32,
+    pub faces: Vec<[u32; 3]>,
+    pub positions: Vec<Vec<[f32; 3]>>,
+}
+
+impl ArtifactBody for PoseSetV2 {
     const KIND: ArtifactKind = ArtifactKind::PoseSet;
+
+    fn decode_older(version: u16, payload: &[u8]) -> Result<(Producer, Self), String> {
+        debug_assert_eq!(version, 1, "the oldest readable pose set");
+        let (producer, old): (Producer, PoseSetV1) = crate::codec::decode(payload)?;
+        let PoseSetV1 { names, template, faces, positions } = old;
+        Ok((producer, PoseSetV2 { names, template, faces, positions, groups: Vec::new() }))
+    }
 
     fn validate(&self) -> Result<(), String> {
         let poses = self.positions.len();
         expect_len("names", self.names.len(), "poses", poses)?;
+        if !self.groups.is_empty() {
+            expect_len("groups", self.groups.len(), "poses", poses)?;
+        }
         if self.template as usize >= poses {
             return Err(format!("template index {} is out of range for {poses} poses", self.template));
         }
@@ -45,19 +67,22 @@ impl ArtifactBody for PoseSetV1 {
     }
 }
 
-impl PoseSetV1 {
+impl PoseSetV2 {
     pub fn from_pose_set(set: &PoseSet) -> Self {
-        PoseSetV1 {
+        PoseSetV2 {
             names: set.names.clone(),
             template: set.template as u32,
             faces: set.faces.clone(),
             positions: set.poses.iter().map(|p| p.iter().map(vec3_to_f32).collect()).collect(),
+            groups: set.groups.clone().unwrap_or_default(),
         }
     }
 
     pub fn to_pose_set(&self) -> Result<PoseSet, MeshError> {
         let poses = self.positions.iter().map(|p| p.iter().map(|&q| vec3_from_f32(q)).collect()).collect();
-        PoseSet::try_new(self.names.clone(), poses, self.faces.clone(), self.template as usize)
+        let groups = (!self.groups.is_empty()).then(|| self.groups.clone());
+        PoseSet::try_new(self.names.clone(), poses, self.faces.clone(), self.template as usize)?
+            .with_groups(groups)
     }
 }
 

@@ -35,7 +35,22 @@ class PoseSet:
         part_names: Optional[Sequence[str]] = None,
         parts: Optional[str] = None,
         progress: _Progress = None,
+        groups: Optional[npt.ArrayLike] = None,
     ) -> None: ...
+    @classmethod
+    def from_body_model(
+        cls,
+        model: Any,
+        shapes: int = 24,
+        poses: int = 6,
+        seed: int = 0,
+        pose_sigma: Optional[float] = None,
+        expressions: bool = True,
+        parts: int = 16,
+        progress: _Progress = None,
+    ) -> "PoseSet":
+        """Samples a body-models model: the template, then ``shapes`` x ``poses``
+        samples, one group per shape, labels from the skin weights."""
     @property
     def poses(self) -> npt.NDArray[np.float64]:
         """(P, V, 3) positions."""
@@ -51,6 +66,9 @@ class PoseSet:
     def names(self) -> list[str]: ...
     @property
     def template(self) -> int: ...
+    @property
+    def groups(self) -> Optional[npt.NDArray[np.int64]]:
+        """(P,) group id per pose, or None; held-out figures hold out whole groups."""
     @property
     def vertex_count(self) -> int: ...
     @property
