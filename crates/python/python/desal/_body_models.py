@@ -12,8 +12,10 @@ The draw, documented and seeded (`numpy.random.default_rng(seed)`):
   component, clipped to +-2.5. One draw per shape; every pose of a shape shares it, and
   the shape is the pose's group.
 - **Poses.** Each rotation whose role is "pose": per joint an axis-angle drawn from
-  N(0, sigma^2) per axis, sigma = 0.3 rad for body joints and 0.2 for hands, head and
-  jaw (`pose_sigma` overrides both).
+  N(0, sigma^2) per axis, sigma = 0.3 rad for body joints (the head and neck among them)
+  and 0.2 for hands, jaw, eyes and every other joint of a head pose (ANNY's facial rig:
+  lips, tongue, cheeks, lids); `pose_sigma` overrides both. The joints' names come
+  from the model's `pose_joint_indices`.
 - **Expressions** ("expression" parameters: FLAME, SMPL-X): N(0, 1) per component for
   each pose when `expressions`, else zero.
 - **Global rotation:** about the up axis (the rest mesh's longest extent), uniform in
@@ -33,7 +35,31 @@ import numpy as np
 BODY_SIGMA = 0.3
 FINE_SIGMA = 0.2
 
-_FINE_WORDS = ("hand", "head", "jaw", "eye", "finger", "face")
+_HAND_WORDS = ("hand", "finger", "metacarpal", "thumb", "index", "middle", "ring", "pinky")
+
+
+def joint_sigma(parameter: str, joint: str) -> float:
+    """The documented sigma (rad) of one joint of a pose parameter."""
+    p, j = parameter.lower(), joint.lower()
+    if "jaw" in j or "eye" in j or any(w in p or w in j for w in _HAND_WORDS):
+        return FINE_SIGMA
+    if "head" in p and not (j.startswith("head") or "neck" in j):
+        return FINE_SIGMA
+    return BODY_SIGMA
+
+
+def _sigmas(model: Any, name: str, s: Any) -> Any:
+    """Per-joint sigmas of a rotation parameter, shaped to broadcast over its draw."""
+    if len(s.dims) < 2:
+        return joint_sigma(name, name)
+    count = s.dims[0]
+    try:
+        names = [model.joint_names[i] for i in model.pose_joint_indices[name]]
+    except (AttributeError, KeyError, IndexError, TypeError):
+        names = [name] * count
+    if len(names) != count:
+        names = [name] * count
+    return np.array([joint_sigma(name, j) for j in names])[:, None]
 
 
 def _spec(model: Any) -> dict:
@@ -124,9 +150,8 @@ def sample(
                     one = np.clip(rng.standard_normal(s.dims), -2.5, 2.5)
                 draw = np.broadcast_to(one, dims).copy()
             elif s.role == "pose" and s.rotation_type == "axis_angle":
-                fine = any(w in name.lower() for w in _FINE_WORDS)
-                sigma = pose_sigma if pose_sigma is not None else (FINE_SIGMA if fine else BODY_SIGMA)
-                draw = rng.normal(0.0, sigma, dims)
+                sigma = _sigmas(model, name, s) if pose_sigma is None else pose_sigma
+                draw = rng.standard_normal(dims) * sigma
             elif name == "global_rotation" and s.rotation_type == "axis_angle":
                 draw = _axis_rotation(up, rng.uniform(-math.pi, math.pi, poses))
             else:
