@@ -70,9 +70,9 @@
 //! triangles, solves `J_regressor` over the kept vertices so that the joints stay where
 //! the full model puts them for every shape (and expression) its blend shapes span, and
 //! moves SMPL-X's and FLAME's landmark embeddings onto the new triangles; every other key
-//! is kept as it came (the rule is in [`subset`]). [`BodyModel::to_npz`] writes a model
+//! is kept as it came (the rule is in [`mod@subset`]). [`BodyModel::to_npz`] writes a model
 //! in its file's own keys, order and element types; a `.pkl` model comes out as an npz of
-//! the same keys ([`write`]).
+//! the same keys ([`mod@write`]).
 //!
 //! **Invariant:** no paths beyond the one file [`BodyModel::read`] is given; no pipeline,
 //! cache or progress bar. Models are f64 throughout.

@@ -6,7 +6,7 @@
 //! The story, in [`subset_model`]:
 //! 1. every per-vertex array (`v_template`, `shapedirs` and the expression directions,
 //!    `posedirs`, `weights`) keeps the rows of the kept vertices, in `simp_idx` order;
-//! 2. `J_regressor`, per joint ([`solve_joint_row`]): SMPL regresses the rest joints from
+//! 2. `J_regressor`, per joint (`solve_joint_row`): SMPL regresses the rest joints from
 //!    the shaped surface, `J = R (T + Σ_k β_k S_k)`, so the joints of the smaller model
 //!    equal the full model's for *every* shape (and expression) exactly when each row `w`
 //!    over the kept vertices reproduces the full row `r` on every column of the basis
