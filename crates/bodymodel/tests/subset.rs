@@ -29,7 +29,7 @@ fn f64s(shape: Vec<usize>, data: Vec<f64>) -> AnyArray {
 /// A FLAME-kind model (5 joints) of 4 vertices: 0 at (0, 0, 0), 1 at (1, 0, 0), 2 at
 /// (2, 0, 0) and 3 at (0, 5, 1); one shape direction, linear along the line (vertex k
 /// moves k cm along y), vertex 3's its own. Every joint is regressed from vertex 1 alone;
-/// two triangles; a landmark on each.
+/// two triangles; a landmark on each; a per-vertex extra.
 fn line_model() -> Vec<(&'static str, AnyArray)> {
     let (v, j) = (4, 5);
     let shapedirs = vec![0.0, 0.0, 0.0, 0.0, 0.01, 0.0, 0.0, 0.02, 0.0, 0.03, 0.0, 0.0];
@@ -58,6 +58,7 @@ fn line_model() -> Vec<(&'static str, AnyArray)> {
             AnyArray { shape: vec![2, 3], data: AnyData::F32(vec![0.2, 0.3, 0.5, 1.0, 0.0, 0.0]) },
         ),
         ("bs_style", AnyArray { shape: vec![], data: AnyData::Unicode(vec!["lbs".into()]) }),
+        ("vert_sym_idxs", AnyArray { shape: vec![4], data: AnyData::I64(vec![2, 1, 0, 3]) }),
     ]
 }
 
@@ -118,19 +119,23 @@ fn landmarks_move_with_their_faces() {
     let expected = [0.2, 0.3, 0.5, 1.0, 0.0, 0.0];
     assert!(bary.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-6), "{bary:?}");
     assert_eq!(report.landmarks.len(), 1);
+    // The per-vertex extra is kept as it came, and named as still the full model's.
+    assert_eq!(report.full_size_extras, ["vert_sym_idxs"]);
+    assert_eq!(array(&small, "vert_sym_idxs"), array(&model, "vert_sym_idxs"));
     assert!(report.landmarks[0].moved_max_m < 1e-12);
     // The regressor's vertex is kept: its row is the full one.
     assert_eq!(small.joint_regressor.row(2).collect::<Vec<_>>(), [(1, 1.0)]);
 }
 
-/// A subset naming a vertex twice or past the model, or faces past the kept vertices, is
-/// refused naming it.
+/// An empty subset, one naming a vertex twice or past the model, or faces past the kept
+/// vertices, is refused naming it.
 #[test]
 fn bad_subsets_are_refused_by_index() {
     let model = read(&npz(&line_model()));
     let config = SubsetConfig::default();
     type Case = (&'static [u32], &'static [[u32; 3]], &'static str);
-    let cases: [Case; 3] = [
+    let cases: [Case; 4] = [
+        (&[], &[], "no vertex is kept"),
         (&[0, 2, 0], &[], "model vertex 0 is kept twice"),
         (&[0, 9], &[], "kept vertex 1 is model vertex 9"),
         (&[0, 2, 3], &[[0, 1, 3]], "face 0 [0, 1, 3]"),
