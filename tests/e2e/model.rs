@@ -1,6 +1,6 @@
 //! `[dataset.model]`: the CC0 body in SMPL's layout (`desal_sample::smpl_layout`, written
 //! here as numpy and pickle files) sampled over shapes and poses, through every stage and
-//! a hierarchy, keyed by the model's bytes.
+//! a hierarchy, keyed by the model's bytes; the smaller model it leaves (`model.npz`).
 
 use std::path::{Path, PathBuf};
 
@@ -105,6 +105,11 @@ fn a_model_source_is_checked_when_the_pipeline_is_read() {
         ),
         (text.replace("shapes = 2", "shapes = 0"), "shapes and poses must be at least 1"),
         (text.replace("model.npz", "missing.npz"), "missing.npz"),
+        (
+            text.replace("placement = \"subset\"", "placement = \"optimal\""),
+            "pipeline.toml: dataset 'body'\n  caused by: [simplify] placement = \"optimal\": a [dataset.model] is \
+             simplified with subset placement",
+        ),
     ];
     for (toml, expected) in cases {
         std::fs::write(&pipeline, toml).unwrap();
@@ -113,4 +118,90 @@ fn a_model_source_is_checked_when_the_pipeline_is_read() {
         assert!(stderr(&out).contains(expected), "{expected}: {}", stderr(&out));
         assert!(!dir.path().join("out/body/report.json").exists(), "no partial output");
     }
+}
+
+/// Random parameters within the fixture's basis: its 10 betas ~ U(−2, 2), per joint an
+/// axis-angle of up to 0.5 rad per axis, a translation.
+fn random_params(rng: &mut rand_chacha::ChaCha8Rng) -> (Vec<f64>, Vec<desal_mesh::Vec3>, desal_mesh::Vec3) {
+    use rand::Rng;
+    let mut turn = || {
+        desal_mesh::Vec3::new(rng.gen_range(-0.5..0.5), rng.gen_range(-0.5..0.5), rng.gen_range(-0.5..0.5))
+    };
+    let pose: Vec<desal_mesh::Vec3> = (0..24).map(|_| turn()).collect();
+    let translation = turn();
+    let betas = (0..10).map(|_| rng.gen_range(-2.0..2.0)).collect();
+    (betas, pose, translation)
+}
+
+/// Issue 41, item 5: a model dataset (subset placement by default) leaves `model.npz`,
+/// the model on its kept vertices (`vertex_map.txt`) and simplified triangles, which
+/// reads back as SMPL and at 10 random (betas, pose) evaluates to the full model's kept
+/// vertices and joints to 1e-6 m; `model.json` gives the regressor's residual. The
+/// pickle of the same model gives an npz of the same keys and the same model.
+#[test]
+fn a_model_dataset_leaves_the_simplified_model() {
+    use desal_bodymodel::{BodyModel, Params};
+    use rand::SeedableRng;
+
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = write_model_dataset(dir.path(), "model.npz", "");
+    let text = std::fs::read_to_string(&pipeline).unwrap();
+    let text = text
+        .replace("placement = \"subset\"\n", "")
+        .replace("[dataset.hierarchy]\nlevels = [1500, 400]\n", "");
+    std::fs::write(&pipeline, text).unwrap();
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let body = dir.path().join("out/body");
+    let files = report(dir.path())["files"].clone();
+    assert!(files.as_array().unwrap().iter().any(|f| f == "model.npz") && body.join("model.json").is_file());
+
+    let full = BodyModel::read(&dir.path().join("model.npz")).unwrap();
+    let small = BodyModel::read(&body.join("model.npz")).unwrap();
+    let kept: Vec<usize> = std::fs::read_to_string(body.join("vertex_map.txt"))
+        .unwrap()
+        .lines()
+        .map(|l| l.parse().unwrap())
+        .collect();
+    let simplified = desal_io::read_mesh(&body.join("simplified/template.ply")).unwrap();
+    assert_eq!(
+        (small.kind, small.vertex_count(), small.faces.len()),
+        (full.kind, kept.len(), simplified.faces.len())
+    );
+    assert_eq!(small.layout.keys, full.layout.keys, "the input's keys, in its order");
+
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(41);
+    let (mut worst_vertex, mut worst_joint) = (0.0f64, 0.0f64);
+    for _ in 0..10 {
+        let (betas, pose, translation) = random_params(&mut rng);
+        let params = Params { betas: &betas, expression: &[], pose: &pose, translation };
+        let (a, b) = (full.evaluate(&params).unwrap(), small.evaluate(&params).unwrap());
+        for (s, &o) in kept.iter().enumerate() {
+            worst_vertex = worst_vertex.max((b.vertices[s] - a.vertices[o]).norm());
+        }
+        for (p, q) in a.joints.iter().zip(&b.joints) {
+            worst_joint = worst_joint.max((p - q).norm());
+        }
+    }
+    println!(
+        "model.npz at 10 random parameter sets: vertices {worst_vertex:.1e} m, joints {worst_joint:.1e} m"
+    );
+    assert!(worst_vertex < 1e-6 && worst_joint < 1e-6, "{worst_vertex} {worst_joint}");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(body.join("model.json")).unwrap()).unwrap();
+    assert!(summary["max_residual_m"].as_f64().unwrap() < 1e-9, "{summary}");
+    assert_eq!(summary["joints"].as_array().unwrap().len(), 24);
+
+    // The pickle: the same kept vertices (the same samples), an npz of the same keys.
+    let npz_model = std::fs::read(body.join("model.npz")).unwrap();
+    let text = std::fs::read_to_string(&pipeline).unwrap().replace("model.npz", "model.pkl");
+    std::fs::write(&pipeline, text).unwrap();
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let from_pkl = BodyModel::read(&body.join("model.npz")).unwrap();
+    let from_npz = BodyModel::from_npz_bytes(Path::new("model.npz"), &npz_model).unwrap();
+    assert_eq!(from_pkl.layout.keys, from_npz.layout.keys);
+    assert_eq!(from_pkl.faces, from_npz.faces);
+    let close = from_pkl.v_template.iter().zip(&from_npz.v_template).all(|(a, b)| (a - b).norm() < 1e-6);
+    assert!(close, "the pickle's simplified model differs");
 }

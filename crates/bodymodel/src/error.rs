@@ -33,6 +33,14 @@ pub enum BodyModelError {
     #[error("{what}: {given} given, the model has {available}")]
     BadParameters { what: &'static str, given: usize, available: usize },
 
+    /// A vertex subset or its triangles that do not fit the model ([`crate::subset_model`]).
+    #[error("model subset: {reason}")]
+    BadSubset { reason: String },
+
+    /// A model that cannot be written as an npz ([`crate::BodyModel::to_npz`]).
+    #[error("writing the model: {reason}")]
+    Write { reason: String },
+
     /// A sampling setting out of range.
     #[error("sampling setting '{name}': {reason}")]
     BadSetting { name: &'static str, reason: String },

@@ -63,6 +63,17 @@
 //! surface first, mirror pairs together — to at most `target_parts` parts (16 gives
 //! anatomical parts close to SCAPE's); the rule is in [`labels`].
 //!
+//! # A smaller model of the same format ([`subset_model`], [`BodyModel::to_npz`])
+//!
+//! For a simplification with subset placement (every kept vertex a model vertex):
+//! [`subset_model`] keeps the per-vertex rows of the kept vertices, takes the new
+//! triangles, solves `J_regressor` over the kept vertices so that the joints stay where
+//! the full model puts them for every shape (and expression) its blend shapes span, and
+//! moves SMPL-X's and FLAME's landmark embeddings onto the new triangles; every other key
+//! is kept as it came (the rule is in [`mod@subset`]). [`BodyModel::to_npz`] writes a model
+//! in its file's own keys, order and element types; a `.pkl` model comes out as an npz of
+//! the same keys ([`mod@write`]).
+//!
 //! **Invariant:** no paths beyond the one file [`BodyModel::read`] is given; no pipeline,
 //! cache or progress bar. Models are f64 throughout.
 
@@ -72,9 +83,13 @@ pub mod labels;
 pub mod model;
 pub mod read;
 pub mod sample;
+pub mod subset;
+pub mod write;
 
 pub use error::BodyModelError;
 pub use eval::{Params, PoseItem, Posed, Shaped, rodrigues};
 pub use labels::{Skin, labels_from_skin, labels_from_weights};
-pub use model::{BodyModel, ExtraEntry, JointClass, ModelKind, SparseRows};
+pub use model::{BodyModel, ExtraEntry, FileLayout, JointClass, ModelKind, SparseRows};
 pub use sample::{Sample, SampleConfig, Sampler};
+pub use subset::{JointFit, LandmarkFit, SubsetConfig, SubsetReport, subset_model};
+pub use write::NpzModel;

@@ -5,7 +5,7 @@
 //! `0..joint_count()` (the order of `kintree_table`, parents first), `shape` and
 //! `expression` components in the order of their blend shapes.
 
-use desal_io::npz::AnyArray;
+use desal_io::npz::{AnyArray, Dtype};
 use desal_io::pickle::PyValue;
 use desal_mesh::Vec3;
 
@@ -193,6 +193,31 @@ pub enum ExtraEntry {
     Pickled(PyValue),
 }
 
+/// How the file stored SMPL's keys, so that a writer gives a model back in the file's own
+/// form ([`BodyModel::to_npz`]): the key order, each array's element type, and the two
+/// layouts some files use.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FileLayout {
+    /// Every key of the file, in file order (SMPL's and the extras).
+    pub keys: Vec<String>,
+    /// The element type of each of SMPL's keys the file stored (for a pickle, of the array
+    /// inside the chumpy object or of a CSC matrix's data). A key not listed is written as
+    /// float64 (int32 for `f`).
+    pub dtypes: Vec<(String, Dtype)>,
+    /// `shapedirs` was stored flattened, `(V·3·S,)` (some MANO files).
+    pub shapedirs_flat: bool,
+    /// `kintree_table` as stored (SMPL's files put 4294967295 or −1 at the root's parent),
+    /// written back unchanged; `None` for a model built in code.
+    pub kintree_table: Option<AnyArray>,
+}
+
+impl FileLayout {
+    /// The element type the file stored `key` in.
+    pub fn dtype(&self, key: &str) -> Option<Dtype> {
+        self.dtypes.iter().find(|(k, _)| k == key).map(|&(_, d)| d)
+    }
+}
+
 /// A parametric body model in SMPL's layout, every array in f64.
 ///
 /// Layouts (row-major, the file's own):
@@ -220,6 +245,8 @@ pub struct BodyModel {
     pub pose_mean: Vec<Vec3>,
     /// Every key the model does not interpret, in file order.
     pub extras: Vec<(String, ExtraEntry)>,
+    /// How the file stored the model.
+    pub layout: FileLayout,
 }
 
 impl BodyModel {

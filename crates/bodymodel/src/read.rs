@@ -5,12 +5,14 @@
 
 use std::path::Path;
 
-use desal_io::npz::{AnyArray, AnyData, NpzEntry, decode_npy_any};
+use std::cell::RefCell;
+
+use desal_io::npz::{AnyArray, AnyData, Dtype, NpzEntry, decode_npy_any};
 use desal_io::pickle::{PyValue, unpickle};
 use desal_mesh::Vec3;
 
 use crate::error::BodyModelError;
-use crate::model::{BodyModel, ExtraEntry, ModelKind, SparseRows};
+use crate::model::{BodyModel, ExtraEntry, FileLayout, ModelKind, SparseRows};
 
 /// The keys [`BodyModel`] holds in its own fields; every other key becomes an
 /// [`ExtraEntry`] (the mean hand poses `hands_mean`, `hands_meanl`, `hands_meanr` are
@@ -93,9 +95,17 @@ enum Matrix {
 struct Reader<'a> {
     path: &'a Path,
     source: Source,
+    /// The element type of every array read, by key (for [`FileLayout::dtypes`]).
+    dtypes: RefCell<Vec<(String, Dtype)>>,
 }
 
 impl Reader<'_> {
+    fn record_dtype(&self, key: &str, dtype: Option<Dtype>) {
+        if let Some(dtype) = dtype {
+            self.dtypes.borrow_mut().push((key.to_owned(), dtype));
+        }
+    }
+
     fn bad(&self, key: &str, reason: impl Into<String>) -> BodyModelError {
         bad(self.path, key, reason)
     }
@@ -137,8 +147,9 @@ impl Reader<'_> {
                 },
                 _ => return Err(self.bad(key, "is a CSC matrix without its shape")),
             };
-            let data =
-                array("data")?.data.to_f64().ok_or_else(|| self.bad(key, "has non-numeric CSC data"))?;
+            let data = array("data")?;
+            self.record_dtype(key, data.data.dtype());
+            let data = data.data.to_f64().ok_or_else(|| self.bad(key, "has non-numeric CSC data"))?;
             let indices = array("indices")?
                 .data
                 .to_i64()
@@ -193,6 +204,7 @@ impl Reader<'_> {
     }
 
     fn finite(&self, key: &str, a: AnyArray) -> Result<(Vec<usize>, Vec<f64>), BodyModelError> {
+        self.record_dtype(key, a.data.dtype());
         let values = a
             .data
             .to_f64()
@@ -220,10 +232,20 @@ impl Reader<'_> {
 }
 
 fn build(path: &Path, source: Source) -> Result<BodyModel, BodyModelError> {
-    let r = Reader { path, source };
+    let keys: Vec<String> = match &source {
+        Source::Npz(entries) => entries.iter().map(|e| e.name.clone()).collect(),
+        Source::Pkl(entries) => entries.iter().map(|(k, _)| k.clone()).collect(),
+    };
+    let r = Reader { path, source, dtypes: RefCell::new(Vec::new()) };
 
     // The tree first: its joint count names the kind.
-    let (shape, table) = r.dense("kintree_table")?;
+    let kintree_table = match r.required("kintree_table")? {
+        Matrix::Dense(a) => a,
+        Matrix::Csc { .. } => {
+            return Err(r.bad("kintree_table", "is a sparse matrix, a dense array is needed"));
+        }
+    };
+    let (shape, table) = r.finite("kintree_table", kintree_table.clone())?;
     r.expect_shape("kintree_table", &shape, &[Some(2), None])?;
     let joint_count = shape[1];
     let kind = ModelKind::from_joint_count(joint_count)
@@ -253,7 +275,8 @@ fn build(path: &Path, source: Source) -> Result<BodyModel, BodyModelError> {
 
     // MANO files may store shapedirs flattened; SMPL's layout is (V, 3, S).
     let (mut shape, dirs) = r.dense("shapedirs")?;
-    if shape.len() == 1 && vertex_count > 0 && shape[0] % (3 * vertex_count) == 0 {
+    let shapedirs_flat = shape.len() == 1 && vertex_count > 0 && shape[0] % (3 * vertex_count) == 0;
+    if shapedirs_flat {
         shape = vec![vertex_count, 3, shape[0] / (3 * vertex_count)];
     }
     r.expect_shape("shapedirs", &shape, &[Some(vertex_count), Some(3), None])?;
@@ -320,6 +343,10 @@ fn build(path: &Path, source: Source) -> Result<BodyModel, BodyModelError> {
             .collect(),
     };
 
+    let mut dtypes = r.dtypes.take();
+    dtypes.retain(|(k, _)| MODEL_KEYS.contains(&k.as_str()));
+    let layout = FileLayout { keys, dtypes, shapedirs_flat, kintree_table: Some(kintree_table) };
+
     Ok(BodyModel {
         kind,
         v_template,
@@ -334,6 +361,7 @@ fn build(path: &Path, source: Source) -> Result<BodyModel, BodyModelError> {
         joint_regressor,
         pose_mean,
         extras,
+        layout,
     })
 }
 
@@ -404,5 +432,34 @@ fn hand_mean_keys(kind: ModelKind) -> Vec<(&'static str, usize)> {
         ModelKind::SmplX => vec![("hands_meanl", 25), ("hands_meanr", 40)],
         ModelKind::Mano => vec![("hands_mean", 1)],
         _ => Vec::new(),
+    }
+}
+
+/// A pickled value that numpy can hold without pickling, as an array: an ndarray, a
+/// chumpy object's array, a scipy CSC matrix made dense, or a scalar string, bytes or
+/// number as a 0-d array (what `np.savez` makes of them). `Err` names what it is instead
+/// (a dict, a list, None): such a value has no plain `.npy` form.
+pub(crate) fn pickled_array(value: &PyValue) -> Result<AnyArray, String> {
+    let scalar = |data: AnyData| Ok(AnyArray { shape: Vec::new(), data });
+    match value {
+        PyValue::Str(s) => scalar(AnyData::Unicode(vec![s.clone()])),
+        PyValue::Bytes(b) => scalar(AnyData::Bytes(vec![b.clone()])),
+        PyValue::Int(n) => scalar(AnyData::I64(vec![*n])),
+        PyValue::Float(x) => scalar(AnyData::F64(vec![*x])),
+        PyValue::Bool(b) => scalar(AnyData::Bool(vec![*b])),
+        PyValue::Array(a) => Ok(a.clone()),
+        PyValue::Object { .. } => {
+            let path = Path::new("<pickle>");
+            let reader = Reader { path, source: Source::Pkl(Vec::new()), dtypes: RefCell::new(Vec::new()) };
+            match reader.pickled_matrix("value", value).map_err(|e| e.to_string())? {
+                Matrix::Dense(a) => Ok(a),
+                Matrix::Csc { shape, data, indices, indptr } => {
+                    let rows = csc_to_rows(&data, &indices, &indptr, shape)?;
+                    let dense = crate::write::dense(&rows, shape[0], shape[1]);
+                    Ok(AnyArray { shape: shape.to_vec(), data: AnyData::F64(dense) })
+                }
+            }
+        }
+        other => Err(format!("is a {}, which has no plain numpy form", other.type_name())),
     }
 }

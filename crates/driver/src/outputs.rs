@@ -13,6 +13,7 @@
 //! | `hierarchy-<k>.dsa`, `hierarchy.npz`, `hierarchy.json` | with `[dataset.hierarchy]`: each level's cache entry, the npz of every level (`stages::hierarchy::npz_arrays`), the levels' summaries |
 //! | `hierarchy.png`, `upsampling-error.png`, `upsampling-error-<k>.ply` | with `[dataset.hierarchy]`: the levels side by side; the held-out per-vertex upsampling error of each level, fitted against barycentric (RMS, drawn and as PLY properties) |
 //! | `simplified.glb`, `simplified-rig.json` | with `[dataset.rig]`: the simplified rig (`stages::rig::simplified_glb`) and its figures |
+//! | `model.npz`, `model.json` | with `[dataset.model]`: the simplified model in the input's keys and dtypes (an npz also for a `.pkl` input), its joint regressor solved on the kept vertices (`stages::model::simplified_model`), and what the solve and the landmarks did |
 //! | `view.html` | with `[dataset.rig]`: both rigs side by side in three.js, loaded from its pinned CDN URLs, or inlined from the package `DESAL_THREE` names (`viewer.rs`) |
 //! | `report.json` | the run's report, with `outputs_key` |
 //! | `eval/` | `desal eval`'s, kept across runs |
@@ -31,8 +32,9 @@ use crate::stages::{Counts, DatasetStages};
 /// What the output writers write: part of [`outputs_key`], so that a folder written by
 /// an older desal is rewritten, not kept as in place. Bump it whenever a writer here
 /// adds, drops or changes a file. 2: the hierarchy figures and the rig viewer. 3: the
-/// viewer's three.js from its CDN or `DESAL_THREE`, no `viewer/three/` copy.
-pub const OUTPUTS_VERSION: u32 = 3;
+/// viewer's three.js from its CDN or `DESAL_THREE`, no `viewer/three/` copy. 4: a model
+/// dataset's `model.npz` and `model.json`.
+pub const OUTPUTS_VERSION: u32 = 4;
 
 /// `desal eval`'s folder inside a dataset's output folder: kept when `desal run` replaces
 /// the rest (it depends on the pipeline's inputs, not on the run's stage parameters).
@@ -161,6 +163,13 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
     add_artifact(&mut outputs, "map", &stages.map)?;
     if !stages.hierarchy.is_empty() {
         add_hierarchy(&mut outputs, stages, set, part_labels, up_axis)?;
+    }
+    if let Some(model) = &stages.model {
+        // Built before anything is written, like the rig below.
+        let (bytes, summary) = crate::stages::model::simplified_model(model, map)?;
+        outputs.files.push(("model.npz".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, &bytes)?))));
+        let summary = serde_json::to_value(&summary)?;
+        outputs.files.push(("model.json".into(), Box::new(move |p| Ok(desal_io::write_json(p, &summary)?))));
     }
     if let Some(rig) = &stages.rig {
         // Built before anything is written: a rig that cannot be written fails the run

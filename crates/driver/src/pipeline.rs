@@ -211,7 +211,7 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
     let mut datasets = Vec::new();
     for (k, table) in file.datasets.iter().enumerate() {
         let merged = merge(&file.defaults, table);
-        let spec: DatasetToml = merged
+        let mut spec: DatasetToml = merged
             .try_into()
             .with_context(|| format!("{}: dataset #{} ({})", path.display(), k + 1, dataset_name(table)))?;
         check_dataset_name(&spec.name).with_context(|| format!("{}: dataset #{}", path.display(), k + 1))?;
@@ -227,6 +227,9 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
             );
         }
         let in_dataset = || format!("{}: dataset '{}'", path.display(), spec.name);
+        if spec.model.is_some() {
+            crate::stages::model::use_subset_placement(&mut spec.simplify).with_context(in_dataset)?;
+        }
         let (pose_files, labels, source_file) = match (&spec.model, &spec.rig, &spec.poses, &spec.labels) {
             (Some(model), None, None, None) => {
                 if spec.template.is_some() || spec.ignore_pose_faces || spec.parts != PartsParams::default() {

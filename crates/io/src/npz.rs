@@ -502,6 +502,67 @@ impl AnyData {
     }
 }
 
+/// A numeric element type of [`AnyData`]: what a writer keeps when it gives an array back
+/// in the type its file stored it in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Dtype {
+    Bool,
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    I64,
+    U64,
+    F32,
+    F64,
+}
+
+impl AnyData {
+    /// The element type of numeric data; `None` for strings.
+    pub fn dtype(&self) -> Option<Dtype> {
+        Some(match self {
+            AnyData::Bool(_) => Dtype::Bool,
+            AnyData::I8(_) => Dtype::I8,
+            AnyData::U8(_) => Dtype::U8,
+            AnyData::I16(_) => Dtype::I16,
+            AnyData::U16(_) => Dtype::U16,
+            AnyData::I32(_) => Dtype::I32,
+            AnyData::U32(_) => Dtype::U32,
+            AnyData::I64(_) => Dtype::I64,
+            AnyData::U64(_) => Dtype::U64,
+            AnyData::F32(_) => Dtype::F32,
+            AnyData::F64(_) => Dtype::F64,
+            AnyData::Unicode(_) | AnyData::Bytes(_) => return None,
+        })
+    }
+
+    /// `values` in `dtype`, as numpy's `astype` casts: floats rounded to nearest for
+    /// float32, truncated toward zero (and saturated) for integers, nonzero for bool.
+    /// Exact for values the type holds, such as indices read from a file of that type.
+    pub fn from_f64(dtype: Dtype, values: &[f64]) -> AnyData {
+        macro_rules! cast {
+            ($variant:ident, $t:ty) => {
+                AnyData::$variant(values.iter().map(|&x| x as $t).collect())
+            };
+        }
+        match dtype {
+            Dtype::Bool => AnyData::Bool(values.iter().map(|&x| x != 0.0).collect()),
+            Dtype::I8 => cast!(I8, i8),
+            Dtype::U8 => cast!(U8, u8),
+            Dtype::I16 => cast!(I16, i16),
+            Dtype::U16 => cast!(U16, u16),
+            Dtype::I32 => cast!(I32, i32),
+            Dtype::U32 => cast!(U32, u32),
+            Dtype::I64 => cast!(I64, i64),
+            Dtype::U64 => cast!(U64, u64),
+            Dtype::F32 => cast!(F32, f32),
+            Dtype::F64 => AnyData::F64(values.to_vec()),
+        }
+    }
+}
+
 /// An array of any plain dtype: a shape and `shape.iter().product()` values in C order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AnyArray {
@@ -1166,6 +1227,30 @@ mod tests {
         }
         let archive = encode_npz_entries(&entries).unwrap();
         assert_eq!(decode_npz_entries(&archive).unwrap(), entries);
+    }
+
+    /// Values read as f64 and cast back to the element type they came in are the same
+    /// values (what a writer of a model's arrays relies on); strings have no dtype.
+    #[test]
+    fn numbers_cast_back_to_their_own_dtype() {
+        let arrays = [
+            AnyData::Bool(vec![true, false]),
+            AnyData::I8(vec![-1, 0, 127]),
+            AnyData::U8(vec![0, 255]),
+            AnyData::I16(vec![-32768, 7]),
+            AnyData::U16(vec![7, 65535]),
+            AnyData::I32(vec![-1, i32::MAX]),
+            AnyData::U32(vec![0, u32::MAX]),
+            AnyData::I64(vec![-1, 1 << 52]),
+            AnyData::U64(vec![0, 1 << 53]),
+            AnyData::F32(vec![0.1, -1e30, f32::MIN_POSITIVE]),
+            AnyData::F64(vec![0.1, -1e300]),
+        ];
+        for data in arrays {
+            let dtype = data.dtype().unwrap();
+            assert_eq!(AnyData::from_f64(dtype, &data.to_f64().unwrap()), data, "{dtype:?}");
+        }
+        assert_eq!(AnyData::Unicode(vec!["lbs".into()]).dtype(), None);
     }
 
     /// A forged shape or descr is refused, never allocated: the data must be exactly as

@@ -82,6 +82,8 @@ pub struct DatasetStages {
     pub hierarchy: Vec<Staged<HierarchyLevelV1, LevelSummary>>,
     /// The rig the poses came from, for a `[dataset.rig]` dataset (`simplified.glb`).
     pub rig: Option<rig::RigSource>,
+    /// The model the poses came from, for a `[dataset.model]` dataset (`model.npz`).
+    pub model: Option<model::ModelSource>,
     pose_set: OnceCell<PoseSet>,
     part_labels: OnceCell<PartLabels>,
 }
@@ -204,6 +206,7 @@ pub fn run_stages(
     Ok(DatasetStages {
         hierarchy,
         rig: inputs.rig.map(|r| r.to_owned()),
+        model: inputs.model.map(|m| m.to_owned()),
         poses,
         labels,
         parts: parts_summary,

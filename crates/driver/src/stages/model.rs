@@ -8,18 +8,29 @@
 //! Both stages are keyed by the model file's bytes (never its path) and every sampling
 //! setting. Pose names are `template` and `s<shape>-p<pose>`, so a sample's shape (its
 //! person) can be read from its name.
+//!
+//! A model dataset is simplified with subset placement ([`use_subset_placement`]: the
+//! default for it, and `placement = "optimal"` is refused), so that every kept vertex is
+//! a model vertex and the output folder can hold the smaller model itself:
+//! [`simplified_model`] writes `model.npz` (`desal_bodymodel::subset_model`, in the
+//! input's keys and dtypes; a `.pkl` input comes out as an npz of the same keys) and
+//! `model.json`, what the joint regressor's solve and the landmarks did.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
-use desal_bodymodel::{BodyModel, SampleConfig, Sampler, labels_from_weights};
-use desal_io::artifact::{ArtifactKind, ContentHash, LabelsV1, PoseSetV2};
+use desal_bodymodel::{
+    BodyModel, SampleConfig, Sampler, SubsetConfig, SubsetReport, labels_from_weights, subset_model,
+};
+use desal_io::artifact::{ArtifactKind, ContentHash, LabelsV1, MapV1, PoseSetV2};
+use desal_simplify::Placement;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use crate::cache::{StageKey, canonical_json};
 use crate::stages::ingest::{IngestSummary, LabelsSummary, hash_file};
 use crate::stages::runner::StageOutput;
+use crate::stages::simplify::SimplifyParams;
 
 /// Version of what this module adds to `desal-bodymodel`: the pose names, the template,
 /// the labels' checks. Bumped when the pose set or labels of a model change.
@@ -211,4 +222,73 @@ impl ModelInput<'_> {
         let summary = LabelsSummary { parts: labels.names.clone(), vertices_per_part: sizes };
         Ok(StageOutput { body: LabelsV1::from_labels(&labels), summary, note })
     }
+}
+
+/// A model dataset's stage 3 keeps model vertices: subset placement unless a method sets
+/// its own (all of desal's do: subset). `placement = "optimal"` is refused, because
+/// `model.npz` is the model on the kept vertices and an optimal placement moves them off
+/// the model.
+pub fn use_subset_placement(simplify: &mut SimplifyParams) -> Result<()> {
+    if simplify.given.contains(&"placement") && simplify.placement != Placement::Subset {
+        bail!(
+            "[simplify] placement = \"{}\": a [dataset.model] is simplified with subset placement, so that \
+             every kept vertex is a model vertex and model.npz is the model on them; remove `placement` \
+             or set it to \"subset\"",
+            simplify.placement.name()
+        );
+    }
+    simplify.placement = Placement::Subset;
+    Ok(())
+}
+
+/// `model.json`: what [`simplified_model`] did.
+#[derive(Debug, Clone, Serialize)]
+pub struct SimplifiedModelSummary {
+    /// `SMPL`, `SMPL-H`, `SMPL-X`, `MANO` or `FLAME`.
+    pub kind: String,
+    /// The input's file name; `model.npz` is an npz whatever the input was.
+    pub source: String,
+    pub vertices_in: usize,
+    /// Keys of a `.pkl` with no plain numpy form (dicts, lists), left out, each with why.
+    pub dropped: Vec<(String, String)>,
+    #[serde(flatten)]
+    pub subset: SubsetReport,
+}
+
+/// The model file a model dataset's outputs are made from.
+#[derive(Debug, Clone)]
+pub struct ModelSource {
+    pub file: PathBuf,
+}
+
+impl ModelInput<'_> {
+    pub fn to_owned(&self) -> ModelSource {
+        ModelSource { file: self.file.to_owned() }
+    }
+}
+
+/// `model.npz` (its bytes) and `model.json`: the model restricted to the map's kept
+/// vertices and triangles (`simp_to_orig`, subset placement), its joint regressor solved
+/// on the kept vertices; see `desal_bodymodel::subset`.
+pub fn simplified_model(source: &ModelSource, map: &MapV1) -> Result<(Vec<u8>, SimplifiedModelSummary)> {
+    let file = &source.file;
+    if map.mode != "subset" {
+        bail!(
+            "{}: model.npz needs a subset map (every kept vertex a model vertex), this one is '{}'",
+            file.display(),
+            map.mode
+        );
+    }
+    let model = BodyModel::read(file)?;
+    let (small, subset) = subset_model(&model, &map.simp_to_orig, &map.faces, &SubsetConfig::default())
+        .with_context(|| format!("{}: the simplified model", file.display()))?;
+    let written = small.to_npz().with_context(|| format!("{}: model.npz", file.display()))?;
+    let summary = SimplifiedModelSummary {
+        kind: model.kind.name().to_owned(),
+        source: crate::stages::ingest::file_name(file),
+        vertices_in: model.vertex_count(),
+        dropped: written.dropped,
+        subset,
+    };
+    Ok((written.bytes, summary))
 }
