@@ -31,5 +31,5 @@ levels = [2500, 625]
 TOML
 rm -rf "$work/out"
 /usr/bin/time -f "wall %e s, cpu %U+%S s, peak RSS %M KiB" \
-  "$desal" run "$work/model-2048.toml" --quiet --cache-dir "$work/cache-$$" 2>&1 | tail -3
+  "$desal" run "$work/model-2048.toml" --cache-dir "$work/cache-$$" 2>&1 | grep -E "ran|wall"
 rm -rf "$work/cache-$$"
