@@ -671,3 +671,39 @@ fn scape_eval_reports_every_pose_and_moves_vertices_to_the_joints() {
     assert!(md.contains("## Against the paper"));
     assert!(eval_dir.join("deformation.png").is_file());
 }
+
+/// With `groups`, `desal eval` holds out whole groups: no fold's test poses share a group
+/// with its training poses, the template's group is never tested, every other pose is
+/// tested once, and each model is fitted on its fold's split.
+#[test]
+fn eval_over_groups_holds_out_whole_groups() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = sample_pipeline(dir.path(), &data_samples().join("poses"), SAMPLE_TARGET);
+    let text =
+        std::fs::read_to_string(&pipeline).unwrap().replace("up_axis", "groups = \"groups.txt\"\nup_axis");
+    std::fs::write(&pipeline, text).unwrap();
+    // The template (00_rest) and 01 in one group; then groups of 3, 3, 2 and 1 poses.
+    let groups = ["r", "r", "a", "a", "a", "b", "b", "b", "c", "c", "d"];
+    std::fs::write(dir.path().join("groups.txt"), groups.join("\n")).unwrap();
+    let report = eval_ok(&pipeline, "qslim-optimal", &["--no-floor"]);
+    let list = |v: &Value| -> Vec<usize> {
+        v.as_array().unwrap().iter().map(|p| p.as_u64().unwrap() as usize).collect()
+    };
+    let folds = report["folds"].as_array().unwrap();
+    assert_eq!(folds.len(), 2, "--folds 2 over four groups");
+    let mut tested = vec![0; groups.len()];
+    for fold in folds {
+        let (test, training) = (list(&fold["test_poses"]), list(&fold["training_poses"]));
+        for &t in &test {
+            tested[t] += 1;
+            assert!(training.iter().all(|&p| groups[p] != groups[t]), "group {} on both sides", groups[t]);
+        }
+        assert!(training.contains(&0) && training.contains(&1), "the template's group trains");
+    }
+    assert_eq!(tested, [0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 1]);
+    assert_eq!(list(&report["evaluated_poses"]), (2..11).collect::<Vec<_>>());
+    let qslim = method(&report, "qslim-optimal");
+    for (k, fold) in folds.iter().enumerate() {
+        assert_eq!(qslim["models"][k + 1]["training_poses"], fold["training_poses"]);
+    }
+}

@@ -220,11 +220,21 @@ fn evaluate_dataset(
         Some(v) => Target::Vertices(v),
         None => dataset.spec.simplify.target(),
     };
-    let folds = desal_measures::folds(poses.pose_count(), poses.template, args.folds);
+    // With groups, whole groups are held out and the template's group only trains.
+    let folds = desal_measures::pose_set_folds(poses, args.folds);
     if folds.len() < 2 {
-        bail!("held-out evaluation needs at least three poses (the template and two to hold out)");
+        match poses.group_count() {
+            Some(groups) => bail!(
+                "held-out evaluation over groups needs at least two groups besides the template's; the poses \
+                 fall in {groups}"
+            ),
+            None => {
+                bail!("held-out evaluation needs at least three poses (the template and two to hold out)")
+            }
+        }
     }
-    let evaluated: Vec<usize> = (0..poses.pose_count()).filter(|&p| p != poses.template).collect();
+    let mut evaluated: Vec<usize> = folds.concat();
+    evaluated.sort_unstable();
     // Checked now, so a bad --figure-poses fails before anything is computed.
     figure_poses(poses, &evaluated, &args.figure_poses)?;
 

@@ -16,7 +16,7 @@ use desal_mesh::{PartLabels, PoseSet, Real, TriMesh, Vec3};
 use rayon::prelude::*;
 
 use crate::error::EvalError;
-use crate::folds::{folds, training_poses};
+use crate::folds::{pose_set_folds, training_poses};
 use crate::metrics::{SurfaceIndex, VertexIndex, mean, v2f_halves_same_faces, vertex_faces};
 use crate::pose_model::{FittedModel, PoseModel};
 use crate::transform::PartTransform;
@@ -78,10 +78,12 @@ pub fn model_floor_indexed(
     if let Some(truth) = truth {
         assert_eq!(truth.len(), poses.pose_count(), "one surface index per pose");
     }
-    let evaluated: Vec<usize> = (0..poses.pose_count()).filter(|&p| p != poses.template).collect();
+    // Over whole groups when the poses have them (the template's group only trains).
+    let test_folds = pose_set_folds(poses, k);
+    let mut evaluated: Vec<usize> = test_folds.concat();
+    evaluated.sort_unstable();
     let all: Vec<usize> = (0..poses.pose_count()).collect();
     let in_sample = synthesise(poses, labels, transforms, model, &all, &evaluated)?;
-    let test_folds = folds(poses.pose_count(), poses.template, k);
     // The folds' fits are independent: in parallel, collected in fold order.
     let fold_poses: Vec<Vec<Vec<Vec3>>> = test_folds
         .par_iter()
