@@ -16,6 +16,8 @@
 //!
 //! Index spaces: `fine_idx` (level k), `coarse_idx` (level k+1), `orig_idx` (level 0).
 
+use std::borrow::Cow;
+
 use anyhow::{Result, bail};
 use desal_hierarchy::{
     ChainLevel, Coarse, CsrMatrix, FittedConfig, LevelInput, Neighbourhood, Upsampled, Upsampler, V2f,
@@ -308,19 +310,20 @@ impl LevelSummary {
 }
 
 /// Level `parents.len()`'s registered pose set and labels, gathered from level 0 at its
-/// `coarse_to_orig` (level 0 itself when `parents` is empty).
-fn level_pose_set(
-    full: &PoseSet,
-    labels: &PartLabels,
+/// `coarse_to_orig` (level 0 itself, borrowed, when `parents` is empty: a model source's
+/// pose set can be gigabytes).
+fn level_pose_set<'a>(
+    full: &'a PoseSet,
+    labels: &'a PartLabels,
     parent: Option<&HierarchyLevelV1>,
-) -> Result<(PoseSet, PartLabels)> {
-    let Some(p) = parent else { return Ok((full.clone(), labels.clone())) };
+) -> Result<(Cow<'a, PoseSet>, Cow<'a, PartLabels>)> {
+    let Some(p) = parent else { return Ok((Cow::Borrowed(full), Cow::Borrowed(labels))) };
     let set = level_poses(full, &p.coarse_to_orig, &p.faces)?;
     let labels = PartLabels {
         labels: p.coarse_to_orig.iter().map(|&o| labels.labels[o as usize]).collect(),
         names: labels.names.clone(),
     };
-    Ok((set, labels))
+    Ok((Cow::Owned(set), Cow::Owned(labels)))
 }
 
 /// The training mask of the output U: every pose but `[saliency] exclude`'s.
