@@ -396,3 +396,59 @@ fn rig_model_and_gltfpack_are_refused_without_a_rig() {
     assert!(stderr(&out).contains("--baseline meshopt is not one of the --methods"), "{}", stderr(&out));
     assert!(!dir.path().join("out/tube/eval").exists(), "nothing written");
 }
+
+/// The rig sample as a VRM avatar with a textured material, an image beside the file and
+/// a root extension, as `avatar.vrm` in `dir` next to `image_uri`'s file.
+fn write_vrm_avatar(dir: &Path, image_uri: &str) -> PathBuf {
+    let input = std::fs::read(sample_rig()).unwrap();
+    let glb = gltf::binary::Glb::from_slice(&input).unwrap();
+    let mut json: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
+    json["meshes"][0]["primitives"][0]["material"] = 0.into();
+    json["materials"] =
+        serde_json::json!([{"name": "skin", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    json["textures"] = serde_json::json!([{"source": 0}]);
+    json["images"] = serde_json::json!([{"uri": image_uri}]);
+    json["extensions"] = serde_json::json!({"VRM": {"meta": {"title": "sample", "texture": 0}}});
+    json["extensionsUsed"] = serde_json::json!(["VRM"]);
+    let json = serde_json::to_vec(&json).unwrap();
+    let bytes = gltf::binary::Glb { header: glb.header, json: json.into(), bin: glb.bin }.to_vec().unwrap();
+    let image = dir.join(image_uri);
+    std::fs::create_dir_all(image.parent().unwrap()).unwrap();
+    std::fs::write(image, b"\x89PNG not really").unwrap();
+    std::fs::write(dir.join("avatar.vrm"), bytes).unwrap();
+    let pipeline = write_rig_pipeline(dir, b"", "target_vertices = 2676");
+    let text = std::fs::read_to_string(&pipeline).unwrap().replace("avatar.glb", "avatar.vrm");
+    std::fs::write(&pipeline, text).unwrap();
+    pipeline
+}
+
+/// Issue 42, item 1: a `.vrm` comes back as `simplified.vrm`, the input document edited:
+/// its material, texture, image and VRM extension kept, the image beside it copied under
+/// the same relative path; an image whose path would meet one of desal's own outputs is
+/// refused, naming it, and nothing is written.
+#[test]
+fn issue_42_a_vrm_avatar_keeps_its_document_and_its_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = write_vrm_avatar(dir.path(), "textures/skin.png");
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let folder = dir.path().join("out/avatar");
+    assert!(!folder.join("simplified.glb").exists());
+    let written = std::fs::read(folder.join("simplified.vrm")).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_slice(&gltf::binary::Glb::from_slice(&written).unwrap().json).unwrap();
+    assert_eq!(json["images"], serde_json::json!([{"uri": "textures/skin.png"}]));
+    assert_eq!(json["extensions"]["VRM"]["meta"]["title"], "sample");
+    assert_eq!(json["meshes"][0]["primitives"][0]["material"], 0);
+    assert_eq!(std::fs::read(folder.join("textures/skin.png")).unwrap(), b"\x89PNG not really");
+    let simplified = read(&folder.join("simplified.vrm"));
+    assert_eq!(simplified.skin, read(&dir.path().join("avatar.vrm")).skin);
+
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = write_vrm_avatar(dir.path(), "simplified/skin.png");
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(err.contains("avatar.vrm: image 'simplified/skin.png' would be written"), "{err}");
+    assert!(!dir.path().join("out/avatar").exists(), "no partial output");
+}

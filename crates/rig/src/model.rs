@@ -160,6 +160,22 @@ impl Influences {
     }
 }
 
+/// One primitive of the glTF document as a run of the skinned mesh's split vertices and
+/// triangles: the reader appends primitives in order, and the simplified mesh keeps one
+/// run per primitive, so [`crate::edit`] writes each back in place (its material, mode
+/// and extensions untouched).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PrimitiveSpan {
+    /// The glTF mesh (`meshes[mesh]`).
+    pub mesh: usize,
+    /// The primitive within it (`meshes[mesh].primitives[primitive]`).
+    pub primitive: usize,
+    /// Its split vertices.
+    pub vertices: std::ops::Range<u32>,
+    /// Its triangles.
+    pub triangles: std::ops::Range<u32>,
+}
+
 /// The skinned mesh: one triangle list over split vertices, with their attributes.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkinnedMesh {
@@ -171,11 +187,25 @@ pub struct SkinnedMesh {
     pub uvs: Option<Vec<[f32; 2]>>,
     pub influences: Influences,
     pub triangles: Vec<[u32; 3]>,
+    /// The glTF primitives the vertices and triangles come from, in order, covering both
+    /// (empty for a mesh built in memory, which [`crate::write_glb`] writes as one
+    /// primitive).
+    pub primitives: Vec<PrimitiveSpan>,
+    /// For a simplified mesh, the input split vertex each vertex copies its other
+    /// attributes (`TEXCOORD_n`, `COLOR_n`, `TANGENT`, ...) and morph target deltas from;
+    /// empty for a mesh as read.
+    pub sources: Vec<u32>,
 }
 
 impl SkinnedMesh {
     pub fn vertex_count(&self) -> usize {
         self.positions.len()
+    }
+
+    /// The index in [`SkinnedMesh::primitives`] of the span holding split vertex `v`.
+    pub fn primitive_of(&self, v: u32) -> Option<usize> {
+        let p = self.primitives.partition_point(|span| span.vertices.end <= v);
+        (p < self.primitives.len() && self.primitives[p].vertices.contains(&v)).then_some(p)
     }
 }
 

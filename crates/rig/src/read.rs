@@ -16,7 +16,8 @@
 //! weights on joints the skin does not have, non-triangle
 //! primitives, non-finite values, zero-length rotations, singular inverse bind matrices,
 //! accessors that break the specification. Other meshes, materials, cameras and
-//! extensions are not read (and so not written back).
+//! extensions are not read into the [`Rig`]; [`read_rig_and_document`] keeps the whole
+//! document beside it, and [`crate::edit::write_edited`] writes them back unchanged.
 
 use std::path::{Path, PathBuf};
 
@@ -24,9 +25,10 @@ use gltf::Document;
 
 use crate::RigError;
 use crate::accessor::{Accessors, Semantic};
+use crate::edit::SourceDocument;
 use crate::model::{
-    Animation, Channel, Influences, Interpolation, LocalTransform, Node, Path as ChannelPath, Rig, Skin,
-    SkinnedMesh, WEIGHT_SUM_REPORTED, WeightSums,
+    Animation, Channel, Influences, Interpolation, LocalTransform, Node, Path as ChannelPath, PrimitiveSpan,
+    Rig, Skin, SkinnedMesh, WEIGHT_SUM_REPORTED, WeightSums,
 };
 
 /// How far a vertex's weights may sum from 1 and be kept as written. A vertex further off
@@ -71,14 +73,27 @@ pub fn read_rig(path: &Path, options: &ReadOptions) -> Result<Rig, RigError> {
 
 /// Reads a rig from `bytes`; `path` names it in errors and locates external buffers.
 pub fn read_rig_from(path: &Path, bytes: &[u8], options: &ReadOptions) -> Result<Rig, RigError> {
-    // The one place desal calls into the `gltf` crate: should it panic on a file the
-    // checks let through, the caller gets an error naming the file, not an abort (and
+    read_rig_and_document(path, bytes, options).map(|(rig, _)| rig)
+}
+
+/// [`read_rig_from`], keeping the whole document (its JSON as written, every buffer) for
+/// [`crate::edit::write_edited`].
+pub fn read_rig_and_document(
+    path: &Path,
+    bytes: &[u8],
+    options: &ReadOptions,
+) -> Result<(Rig, SourceDocument), RigError> {
+    // The one place desal calls into the `gltf` crate to read: should it panic on a file
+    // the checks let through, the caller gets an error naming the file, not an abort (and
     // Python no `PanicException`).
     without_panics(path, || read_checked(path, bytes, options))
 }
 
 /// `read()`, with a panic turned into [`RigError::Panic`] naming `path`.
-fn without_panics<T>(path: &Path, read: impl FnOnce() -> Result<T, RigError>) -> Result<T, RigError> {
+pub(crate) fn without_panics<T>(
+    path: &Path,
+    read: impl FnOnce() -> Result<T, RigError>,
+) -> Result<T, RigError> {
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(read)).unwrap_or_else(|panic| {
         let message = panic
             .downcast_ref::<&str>()
@@ -89,18 +104,23 @@ fn without_panics<T>(path: &Path, read: impl FnOnce() -> Result<T, RigError>) ->
     })
 }
 
-fn read_checked(path: &Path, bytes: &[u8], options: &ReadOptions) -> Result<Rig, RigError> {
+fn read_checked(path: &Path, bytes: &[u8], options: &ReadOptions) -> Result<(Rig, SourceDocument), RigError> {
     let parsed = crate::document::parse(path, bytes)?;
     let buffers = load_buffers(path, &parsed.document, parsed.blob.as_deref())?;
     let real_size = buffers.iter().fold(bytes.len(), |sum, b| sum.saturating_add(b.len()));
-    let accessors = Accessors {
-        path,
-        buffers: &buffers,
-        quantized: parsed.extensions.iter().any(|e| e == MESH_QUANTIZATION),
+    let quantized = parsed.extensions.iter().any(|e| e == MESH_QUANTIZATION);
+    let accessors = Accessors { path, buffers: &buffers, quantized, real_size };
+    let reader = Reader { path: path.to_owned(), document: &parsed.document, accessors };
+    let rig = reader.read(options)?;
+    let source = SourceDocument {
+        path: path.to_owned(),
+        json: parsed.original,
+        document: parsed.document,
+        buffers,
+        quantized,
         real_size,
     };
-    let reader = Reader { path: path.to_owned(), document: &parsed.document, accessors };
-    reader.read(options)
+    Ok((rig, source))
 }
 
 struct Reader<'a> {
@@ -225,6 +245,8 @@ impl Reader<'_> {
             uvs: Some(Vec::new()),
             influences: Influences::new(),
             triangles: Vec::new(),
+            primitives: Vec::new(),
+            sources: Vec::new(),
         };
         for primitive in mesh.primitives() {
             let p = primitive.index();
@@ -318,7 +340,14 @@ impl Reader<'_> {
             if let Some(i) = indices.iter().find(|&&i| i as usize >= count) {
                 return Err(bad(&format!("index {i} is out of range: the primitive has {count} vertices")));
             }
+            let first_triangle = out.triangles.len() as u32;
             out.triangles.extend(indices.chunks(3).map(|t| [t[0], t[1], t[2]].map(|i| i + base as u32)));
+            out.primitives.push(PrimitiveSpan {
+                mesh: mesh.index(),
+                primitive: p,
+                vertices: base as u32..(base + count) as u32,
+                triangles: first_triangle..out.triangles.len() as u32,
+            });
         }
         let lengths = [out.normals.as_ref().map(Vec::len), out.uvs.as_ref().map(Vec::len)];
         if lengths.iter().flatten().any(|&l| l != out.positions.len()) {

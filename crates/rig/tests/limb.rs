@@ -13,8 +13,9 @@ use desal_rig::model::{Path as ChannelPath, SkinnedMesh};
 use desal_rig::pose::{animated_locals, sample_channel};
 use desal_rig::{
     Animation, Channel, FrameConfig, Influences, Interpolation, LocalTransform, Node, PartsConfig,
-    PoseSource, PoseTargets, ReadOptions, Rig, RigError, SimplifiedInput, Skin, dominant_joint_parts,
-    joint_matrices, pose_rig, read_rig_from, sample_frames, simplified_rig, skin_points, write_glb,
+    PoseSource, PoseTargets, PrimitiveSpan, ReadOptions, Rig, RigError, SimplifiedInput, Skin,
+    dominant_joint_parts, joint_matrices, pose_rig, read_rig_from, sample_frames, simplified_rig,
+    skin_points, write_glb,
 };
 
 /// Rings along the limb (y from 0 to 2) and segments around it.
@@ -74,7 +75,16 @@ fn limb() -> Rig {
             })
             .collect(),
     );
-    let mesh = SkinnedMesh { name: "limb".into(), positions, normals, uvs: Some(uvs), influences, triangles };
+    let mesh = SkinnedMesh {
+        name: "limb".into(),
+        positions,
+        normals,
+        uvs: Some(uvs),
+        influences,
+        triangles,
+        primitives: Vec::new(),
+        sources: Vec::new(),
+    };
     let mut lower_ibm = identity();
     lower_ibm[13] = -1.0;
     let quarter = std::f32::consts::FRAC_PI_4.sin();
@@ -133,7 +143,10 @@ fn a_rig_survives_a_round_trip_through_glb_bit_for_bit() {
     let rig = limb();
     let bytes = write_glb(&rig).unwrap();
     let back = read(&bytes).unwrap();
-    assert_eq!(back, rig);
+    let (vertices, triangles) = (rig.mesh.vertex_count() as u32, rig.mesh.triangles.len() as u32);
+    let one = PrimitiveSpan { mesh: 0, primitive: 0, vertices: 0..vertices, triangles: 0..triangles };
+    assert_eq!(back.mesh.primitives, [one], "the reader says where the vertices come from");
+    assert_eq!(without_provenance(back.clone()), rig);
     // Same rig, same bytes.
     assert_eq!(write_glb(&back).unwrap(), bytes);
 }
@@ -333,7 +346,14 @@ fn the_simplified_limb_keeps_its_uv_seams_and_exact_weights_with_subset_placemen
     assert_eq!((&out.nodes, &out.skin, &out.animations), (&rig.nodes, &rig.skin, &rig.animations));
     // And it is a file the reader takes back.
     let back = read(&write_glb(&out).unwrap()).unwrap();
-    assert_eq!(back, out);
+    assert_eq!(without_provenance(back), without_provenance(out));
+}
+
+/// `rig` without what says where its mesh came from (its primitives, its source vertices).
+fn without_provenance(mut rig: Rig) -> Rig {
+    rig.mesh.primitives.clear();
+    rig.mesh.sources.clear();
+    rig
 }
 
 /// The weld's seam edges are exactly the two seams: the wrap seam along the limb (its
@@ -538,4 +558,221 @@ fn poses_from_animations_need_an_animation() {
     rig.animations.clear();
     let err = sample_frames(&rig, &FrameConfig::default(), Path::new("limb.glb")).unwrap_err();
     assert!(err.to_string().starts_with("limb.glb: poses = \"animations\""), "{err}");
+}
+
+/// The limb as an avatar document: two materials (one with an extension), textures, a
+/// sampler, an embedded image and one beside the file, a camera and a light on a node, a
+/// rigid visor mesh on the lower joint, VRM 0.x and 1.0 extensions, `extras` on every
+/// kind of element, and a `COLOR_0` of 3-byte elements. Returns the `.vrm` bytes.
+fn avatar_document(dir: &Path) -> Vec<u8> {
+    use serde_json::json;
+    std::fs::create_dir_all(dir.join("tex")).unwrap();
+    std::fs::write(dir.join("tex/skin.png"), EXTERNAL_IMAGE).unwrap();
+    let rig = limb();
+    let glb = write_glb(&rig).unwrap();
+    let parsed = gltf::binary::Glb::from_slice(&glb).unwrap();
+    let mut j: serde_json::Value = serde_json::from_slice(&parsed.json).unwrap();
+    let mut bin = parsed.bin.unwrap().into_owned();
+    let mut view = |bin: &mut Vec<u8>, bytes: &[u8], stride: Option<usize>| {
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        let views = j["bufferViews"].as_array_mut().unwrap();
+        let mut v = json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()});
+        if let Some(stride) = stride {
+            v["byteStride"] = stride.into();
+        }
+        views.push(v);
+        bin.extend_from_slice(bytes);
+        views.len() - 1
+    };
+    let image_view = view(&mut bin, EMBEDDED_IMAGE, None);
+    let n = rig.mesh.vertex_count();
+    let colours: Vec<u8> = (0..n).flat_map(|v| [v as u8, (3 * v) as u8, 7, 0]).collect();
+    let colour_view = view(&mut bin, &colours[..4 * n - 1], Some(4));
+    let visor: Vec<u8> = [[0.0f32, 1.5, 0.3], [0.1, 1.5, 0.3], [0.0, 1.6, 0.3]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let visor_view = view(&mut bin, &visor, None);
+    // A second influence set of zeros, as exporters write for 8 influences: the output
+    // needs one set, so two freed accessor slots are left over.
+    let zeros_view = view(&mut bin, &vec![0; 16 * n], None);
+    let accessors = j["accessors"].as_array_mut().unwrap();
+    accessors.push(json!({"bufferView": colour_view, "componentType": 5121, "normalized": true, "count": n, "type": "VEC3"}));
+    accessors.push(json!({"bufferView": visor_view, "componentType": 5126, "count": 3, "type": "VEC3",
+        "min": [0.0, 1.5, 0.3], "max": [0.1, 1.6, 0.3], "name": "visor positions"}));
+    accessors.push(json!({"bufferView": zeros_view, "componentType": 5123, "count": n, "type": "VEC4"}));
+    accessors.push(json!({"bufferView": zeros_view, "componentType": 5126, "count": n, "type": "VEC4"}));
+    let (colour, visor) = (accessors.len() - 4, accessors.len() - 3);
+    let (joints_1, weights_1) = (accessors.len() - 2, accessors.len() - 1);
+    j["buffers"][0]["byteLength"] = bin.len().into();
+    let primitive = &mut j["meshes"][0]["primitives"][0];
+    primitive["attributes"]["COLOR_0"] = colour.into();
+    primitive["attributes"]["JOINTS_1"] = joints_1.into();
+    primitive["attributes"]["WEIGHTS_1"] = weights_1.into();
+    primitive["material"] = 0.into();
+    primitive["extras"] = json!({"note": "kept"});
+    j["meshes"][0]["extras"] = json!({"targetNames": []});
+    j["meshes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"name": "visor", "primitives": [{"attributes": {"POSITION": visor}, "material": 1}]}));
+    let nodes = j["nodes"].as_array_mut().unwrap();
+    nodes[1]["children"] = json!([3]);
+    nodes[0]["extras"] = json!({"bone": "upper"});
+    nodes.push(json!({"name": "visor", "mesh": 1, "translation": [0.0, 0.5, 0.0]}));
+    nodes.push(json!({"name": "eye", "camera": 0, "extensions": {"KHR_lights_punctual": {"light": 0}}}));
+    j["scenes"][0]["nodes"].as_array_mut().unwrap().push(4.into());
+    j["scenes"][0]["name"] = "avatar".into();
+    j["scenes"][0]["extras"] = json!({"lod": 0});
+    j["skins"][0]["extras"] = json!({"rig": "limb"});
+    j["animations"][0]["extras"] = json!({"loop": true});
+    j["materials"] = json!([
+        {"name": "skin", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}, "extras": {"shader": "toon"},
+         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 2.0}}},
+        {"name": "visor", "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}, "metallicFactor": 0.5}}
+    ]);
+    j["textures"] = json!([{"sampler": 0, "source": 0}, {"sampler": 0, "source": 1, "name": "external"}]);
+    j["samplers"] = json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 33648}]);
+    j["images"] = json!([
+        {"bufferView": image_view, "mimeType": "image/png", "name": "embedded"},
+        {"uri": "tex/skin.png", "name": "beside"}
+    ]);
+    j["cameras"] = json!([{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.01}}]);
+    j["extensions"] = json!({
+        "KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 3.0}]},
+        "VRM": {"meta": {"title": "limb", "texture": 1}, "blendShapeMaster": {"blendShapeGroups": [{"name": "A", "binds": []}]}},
+        "VRMC_vrm": {"specVersion": "1.0", "meta": {"name": "limb", "licenseUrl": "https://example.org"}}
+    });
+    j["extensionsUsed"] =
+        json!(["KHR_lights_punctual", "KHR_materials_emissive_strength", "VRM", "VRMC_vrm"]);
+    j["extras"] = json!({"author": "desal tests", "list": [1, 2, 3]});
+    j["asset"]["copyright"] = "CC0".into();
+    let json = serde_json::to_vec(&j).unwrap();
+    gltf::binary::Glb { header: parsed.header, json: json.into(), bin: Some(bin.into()) }.to_vec().unwrap()
+}
+
+const EMBEDDED_IMAGE: &[u8] = b"\x89PNG\r\n\x1a\n embedded, 31 bytes";
+const EXTERNAL_IMAGE: &[u8] = b"\x89PNG\r\n\x1a\n beside the file";
+
+/// The JSON and binary chunk of a `.glb`.
+fn json_and_bin(glb: &[u8]) -> (serde_json::Value, Vec<u8>) {
+    let glb = gltf::binary::Glb::from_slice(glb).unwrap();
+    (serde_json::from_slice(&glb.json).unwrap(), glb.bin.unwrap().into_owned())
+}
+
+/// The bytes of buffer view `v`.
+fn view_bytes<'a>(json: &serde_json::Value, bin: &'a [u8], v: &serde_json::Value) -> &'a [u8] {
+    let view = &json["bufferViews"][v.as_u64().unwrap() as usize];
+    let offset = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+    &bin[offset..offset + view["byteLength"].as_u64().unwrap() as usize]
+}
+
+/// Issue 42, item 1: the simplified document is the input's with the simplified
+/// primitive's accessors, the buffer views and the buffer changed, and nothing else.
+#[test]
+fn issue_42_the_simplified_document_changes_only_the_simplified_primitive() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = avatar_document(dir.path());
+    let path = dir.path().join("avatar.vrm");
+    let (rig, source) = desal_rig::read_rig_and_document(&path, &bytes, &ReadOptions::default()).unwrap();
+    assert_eq!(source.output_extension(), "vrm", "a .vrm comes back as a .vrm");
+    let (posed, mesh, simp_to_welded) = simplify_limb(&rig, desal_simplify::Placement::Subset, 60, true);
+    let input = SimplifiedInput {
+        positions: &mesh.positions,
+        faces: &mesh.faces,
+        simp_to_welded: &simp_to_welded,
+        subset: true,
+    };
+    let targets = PoseTargets { joints: &posed.joints, positions: &posed.poses.poses };
+    let (out, _) = simplified_rig(&rig, &posed.weld, &input, &targets).unwrap();
+    let edited = desal_rig::write_edited(&source, &rig, &out).unwrap();
+
+    let (before, before_bin) = json_and_bin(&bytes);
+    let (after, after_bin) = json_and_bin(&edited.bytes);
+    let keys = |j: &serde_json::Value| j.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
+    assert_eq!(keys(&after), keys(&before));
+    for key in keys(&before) {
+        if !["accessors", "bufferViews", "buffers", "meshes", "images"].contains(&key.as_str()) {
+            assert_eq!(after[&key], before[&key], "{key}");
+        }
+    }
+    // Meshes: equal but for the simplified primitive's accessor numbers.
+    let strip = |j: &serde_json::Value| {
+        let mut meshes = j["meshes"].clone();
+        let primitive = meshes[0]["primitives"][0].as_object_mut().unwrap();
+        let names = keys(&primitive["attributes"]);
+        primitive.remove("attributes");
+        primitive.remove("indices");
+        (meshes, names)
+    };
+    let (after_meshes, after_names) = strip(&after);
+    let (before_meshes, mut before_names) = strip(&before);
+    assert_eq!(after_meshes, before_meshes);
+    before_names.retain(|n| !n.ends_with("_1"));
+    assert_eq!(after_names, before_names, "one influence set is enough");
+    // No accessor moved: the two slots JOINTS_1 and WEIGHTS_1 freed hold one zero each.
+    assert_eq!(after["accessors"].as_array().unwrap().len(), before["accessors"].as_array().unwrap().len());
+    let leftovers: Vec<&serde_json::Value> =
+        after["accessors"].as_array().unwrap().iter().filter(|a| a["count"] == 1).collect();
+    assert_eq!(leftovers.len(), 2, "{leftovers:?}");
+    for a in leftovers {
+        assert_eq!(view_bytes(&after, &after_bin, &a["bufferView"]), [0; 4]);
+    }
+    // Images: equal but for the view, which holds the same bytes; the one beside the file
+    // comes back to be written beside the output.
+    for (a, b) in after["images"].as_array().unwrap().iter().zip(before["images"].as_array().unwrap()) {
+        let (mut a, mut b) = (a.clone(), b.clone());
+        if let (Some(va), Some(vb)) =
+            (a.as_object_mut().unwrap().remove("bufferView"), b.as_object_mut().unwrap().remove("bufferView"))
+        {
+            assert_eq!(view_bytes(&after, &after_bin, &va), view_bytes(&before, &before_bin, &vb));
+            assert_eq!(view_bytes(&after, &after_bin, &va), EMBEDDED_IMAGE);
+        }
+        assert_eq!(a, b);
+    }
+    assert_eq!(
+        edited.images,
+        [desal_rig::ExternalImage { path: "tex/skin.png".into(), bytes: EXTERNAL_IMAGE.to_vec() }]
+    );
+    // Every accessor a skin, an animation or the visor names is where it was, holding the
+    // same values.
+    let named = [
+        before["skins"][0]["inverseBindMatrices"].clone(),
+        before["animations"][0]["samplers"][0]["input"].clone(),
+        before["animations"][0]["samplers"][0]["output"].clone(),
+        before["meshes"][1]["primitives"][0]["attributes"]["POSITION"].clone(),
+    ];
+    for a in named {
+        let i = a.as_u64().unwrap() as usize;
+        let (mut x, mut y) = (after["accessors"][i].clone(), before["accessors"][i].clone());
+        let (vx, vy) = (
+            x.as_object_mut().unwrap().remove("bufferView").unwrap(),
+            y.as_object_mut().unwrap().remove("bufferView").unwrap(),
+        );
+        assert_eq!(x, y, "accessor {i}");
+        assert_eq!(
+            view_bytes(&after, &after_bin, &vx),
+            view_bytes(&before, &before_bin, &vy),
+            "accessor {i}"
+        );
+    }
+    assert_eq!(after["buffers"], serde_json::json!([{"byteLength": after_bin.len()}]));
+    // The simplified primitive reads back as the simplified mesh, and its COLOR_0 (3-byte
+    // elements, strided to 4) holds each vertex's source colour.
+    let back =
+        read_rig_from(&dir.path().join("simplified.vrm"), &edited.bytes, &ReadOptions::default()).unwrap();
+    assert_eq!(without_provenance(back.clone()).mesh, without_provenance(out.clone()).mesh);
+    let colour = &after["accessors"]
+        [after["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"].as_u64().unwrap() as usize];
+    assert_eq!((colour["componentType"].as_u64(), colour["normalized"].as_bool()), (Some(5121), Some(true)));
+    let colours = view_bytes(&after, &after_bin, &colour["bufferView"]);
+    assert_eq!(after["bufferViews"][colour["bufferView"].as_u64().unwrap() as usize]["byteStride"], 4);
+    for (v, &source) in out.mesh.sources.iter().enumerate() {
+        let s = source as usize;
+        assert_eq!(colours[4 * v..4 * v + 3], [s as u8, (3 * s) as u8, 7], "vertex {v}");
+    }
+    assert!(out.mesh.vertex_count() < rig.mesh.vertex_count());
 }

@@ -184,6 +184,8 @@ pub fn build_rig(inputs: &RigInputs) -> Result<Rig, SampleError> {
             uvs: Some(uvs),
             influences,
             triangles,
+            primitives: Vec::new(),
+            sources: Vec::new(),
         },
     })
 }

@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use desal_io::ContentHash;
 use desal_io::artifact::{ArtifactKind, LabelsV1, MapV1, PoseSetV1, Producer, SimplifiedV1};
-use desal_rig::{FrameConfig, PoseSource, PosedRig, ReadOptions, Rig};
+use desal_rig::{EditedGlb, FrameConfig, PoseSource, PosedRig, ReadOptions, Rig, SourceDocument};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
@@ -198,6 +198,17 @@ impl RigInput<'_> {
         vec![("rig".into(), crate::stages::ingest::file_name(self.file))]
     }
 
+    /// Reads the rig, keeping its whole document, and poses it at its frames: what the
+    /// simplified rig is written from.
+    pub fn load_with_document(&self) -> Result<(Rig, SourceDocument, PosedRig)> {
+        let options = ReadOptions { mesh: self.params.mesh.clone() };
+        let bytes = desal_io::file::read_regular_file(self.file)?;
+        let (rig, document) = desal_rig::read_rig_and_document(self.file, &bytes, &options)?;
+        let frames = desal_rig::sample_frames(&rig, &self.params.frame_config()?, self.file)?;
+        let posed = desal_rig::pose_rig(&rig, &frames).with_context(|| format!("{}", self.file.display()))?;
+        Ok((rig, document, posed))
+    }
+
     /// Reads the rig and poses it at its frames.
     pub fn load(&self) -> Result<(Rig, PosedRig)> {
         let options = ReadOptions { mesh: self.params.mesh.clone() };
@@ -304,18 +315,19 @@ pub struct SimplifiedRigSummary {
     pub max_influences: usize,
 }
 
-/// The simplified rig's bytes: the input's skeleton, inverse bind matrices and animations
-/// with the simplified mesh (subset placement: exact weights; optimal: refitted).
+/// The simplified rig: the input document with the simplified mesh's primitives in place
+/// of its own (subset placement: exact weights; optimal: refitted), everything else the
+/// input's (`desal_rig::edit`), and the external images it names.
 pub fn simplified_glb(
     source: &RigSource,
     simplified: &SimplifiedV1,
     map: &MapV1,
-) -> Result<(Vec<u8>, SimplifiedRigSummary)> {
+) -> Result<(EditedGlb, SimplifiedRigSummary)> {
     let input = RigInput { file: &source.file, params: &source.params };
     let options = source.params.weight_options()?;
-    let (rig, posed) = input.load()?;
+    let (rig, document, posed) = input.load_with_document()?;
     let (out, report) = simplified_rig(&rig, &posed, simplified, map, &options)?;
-    let bytes = desal_rig::write_glb(&out)?;
+    let edited = desal_rig::write_edited(&document, &rig, &out)?;
     let subset = simplified.simp_to_orig.iter().all(Option::is_some);
     let summary = SimplifiedRigSummary {
         placement: simplified.placement.clone(),
@@ -332,7 +344,28 @@ pub fn simplified_glb(
         refitted_vertices: report.refitted_vertices,
         max_influences: report.max_influences,
     };
-    Ok((bytes, summary))
+    Ok((edited, summary))
+}
+
+/// The simplified rig's file name: `simplified.vrm` for a `.vrm` avatar, else
+/// `simplified.glb`.
+pub fn simplified_file_name(source: &RigSource) -> &'static str {
+    let vrm = source.file.extension().is_some_and(|e| e.eq_ignore_ascii_case("vrm"));
+    if vrm { "simplified.vrm" } else { "simplified.glb" }
+}
+
+/// The images a simplified rig written to `glb` names by URI, under the same relative
+/// paths beside it (`desal_rig::ExternalImage::path` holds plain names only).
+pub fn write_images_beside(glb: &Path, images: &[desal_rig::ExternalImage]) -> Result<()> {
+    let folder = glb.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    for image in images {
+        let to = folder.join(&image.path);
+        if let Some(parent) = to.parent() {
+            std::fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
+        }
+        desal_io::write_atomic(&to, &image.bytes)?;
+    }
+    Ok(())
 }
 
 /// The simplified rig of a posed rig, stage 3's mesh and stage 4's map.
