@@ -39,10 +39,6 @@ pub enum RigError {
     #[error("{path}: mesh '{mesh}' primitive {primitive}: {reason}")]
     Primitive { path: PathBuf, mesh: String, primitive: usize, reason: String },
     #[error(
-        "{path}: mesh '{mesh}' primitive {primitive} has {targets} morph target(s); rigs with morph targets are not supported yet: remove them (e.g. bake or delete the shape keys) and export again"
-    )]
-    MorphTargets { path: PathBuf, mesh: String, primitive: usize, targets: usize },
-    #[error(
         "{path}: mesh '{mesh}' vertex {vertex}: every skinning weight is zero (JOINTS_n/WEIGHTS_n), so no joint moves it; weight it in the exporter"
     )]
     NoWeight { path: PathBuf, mesh: String, vertex: usize },

@@ -9,9 +9,11 @@
 //! has a skin; when there are several, [`ReadOptions::mesh`] picks one by mesh or node
 //! name) with `POSITION`, `NORMAL`, `TEXCOORD_0` and every `JOINTS_n`/`WEIGHTS_n` set, its
 //! triangle primitives concatenated; its skin; the animations' translation, rotation and
-//! scale channels. Buffers come from the GLB binary chunk, base64 `data:` URIs, or
-//! regular files inside the glTF's own folder ([`desal_io::confine`]). What is refused,
-//! with the file and the element: no skin, an ambiguous skinned mesh, morph targets,
+//! scale channels. Morph targets (sparse ones too) and every other attribute are checked
+//! (one element per vertex, layout) and carried into the output by [`crate::edit`]: each
+//! kept vertex keeps its deltas. Buffers come from the GLB binary chunk, base64 `data:`
+//! URIs, or regular files inside the glTF's own folder ([`desal_io::confine`]). What is
+//! refused, with the file and the element: no skin, an ambiguous skinned mesh,
 //! all-zero weights (sums off 1 are renormalised and counted in [`Rig::weight_sums`]),
 //! weights on joints the skin does not have, non-triangle
 //! primitives, non-finite values, zero-length rotations, singular inverse bind matrices,
@@ -256,15 +258,6 @@ impl Reader<'_> {
                 primitive: p,
                 reason: reason.to_owned(),
             };
-            let targets = primitive.morph_targets().len();
-            if targets > 0 {
-                return Err(RigError::MorphTargets {
-                    path: self.path.clone(),
-                    mesh: name.clone(),
-                    primitive: p,
-                    targets,
-                });
-            }
             if primitive.mode() != gltf::mesh::Mode::Triangles {
                 return Err(bad(&format!("mode {:?}: only triangle lists are supported", primitive.mode())));
             }
@@ -340,6 +333,7 @@ impl Reader<'_> {
             if let Some(i) = indices.iter().find(|&&i| i as usize >= count) {
                 return Err(bad(&format!("index {i} is out of range: the primitive has {count} vertices")));
             }
+            self.check_carried(&primitive, count, &used_by, &bad)?;
             let first_triangle = out.triangles.len() as u32;
             out.triangles.extend(indices.chunks(3).map(|t| [t[0], t[1], t[2]].map(|i| i + base as u32)));
             out.primitives.push(PrimitiveSpan {
@@ -368,6 +362,41 @@ impl Reader<'_> {
         }
         Ok(out)
     }
+    /// Checks every attribute and morph target delta of `primitive` that the simplified
+    /// rig carries ([`crate::edit`]): one element per vertex (`count`), each accessor's
+    /// layout (sparse ones included) within its buffer, so that writing cannot fail on
+    /// them. The attributes desal reads itself were checked as they were read.
+    fn check_carried(
+        &self,
+        primitive: &gltf::Primitive<'_>,
+        count: usize,
+        used_by: &str,
+        bad: &dyn Fn(&str) -> RigError,
+    ) -> Result<(), RigError> {
+        use gltf::Semantic as S;
+        let read_by_desal =
+            |s: &S| matches!(s, S::Positions | S::Normals | S::TexCoords(0) | S::Joints(_) | S::Weights(_));
+        let targets = primitive.morph_targets().enumerate().flat_map(|(t, target)| {
+            [("POSITION", target.positions()), ("NORMAL", target.normals()), ("TANGENT", target.tangents())]
+                .into_iter()
+                .filter_map(move |(name, a)| Some((format!("morph target {t} {name}"), a?)))
+        });
+        let attributes =
+            primitive.attributes().map(|(semantic, a)| (read_by_desal(&semantic), semantic.to_string(), a));
+        for (read, what, accessor) in attributes.chain(targets.map(|(what, a)| (false, what, a))) {
+            if accessor.count() != count {
+                return Err(bad(&format!(
+                    "{what} has {} elements but POSITION has {count}",
+                    accessor.count()
+                )));
+            }
+            if !read {
+                self.accessors.check(&accessor, Semantic::Carried, &format!("{used_by} {what}"))?;
+            }
+        }
+        Ok(())
+    }
+
     /// Checks and appends the influences of one primitive's vertices (`base..`).
     fn read_influences(
         &self,
@@ -517,7 +546,7 @@ impl Reader<'_> {
                 gltf::animation::Property::Translation => (ChannelPath::Translation, Semantic::Translation),
                 gltf::animation::Property::Rotation => (ChannelPath::Rotation, Semantic::Rotation),
                 gltf::animation::Property::Scale => (ChannelPath::Scale, Semantic::Scale),
-                // Morph target weights: the mesh has no morph targets (they are refused).
+                // Morph target weights: carried unchanged with the animation (desal poses by skinning only).
                 gltf::animation::Property::MorphTargetWeights => {
                     self.accessors.check(&sampler.output(), Semantic::MorphWeights, &used_by)?;
                     continue;

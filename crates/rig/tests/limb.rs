@@ -543,13 +543,107 @@ fn a_joint_the_skin_does_not_have_is_refused() {
     assert!(m.contains("vertex 0: joint 5 has weight 1, but skin 'skin' has only 2 joints"), "{m}");
 }
 
+/// The limb with two morph targets: `wide` moves every vertex (dense), `blink` two of
+/// them (a sparse accessor over no buffer view); named in `extras.targetNames`, with
+/// default weights.
+fn limb_with_morph_targets() -> Vec<u8> {
+    use serde_json::json;
+    let glb = write_glb(&limb()).unwrap();
+    let parsed = gltf::binary::Glb::from_slice(&glb).unwrap();
+    let mut j: serde_json::Value = serde_json::from_slice(&parsed.json).unwrap();
+    let mut bin = parsed.bin.unwrap().into_owned();
+    let n = limb().mesh.vertex_count();
+    let dense: Vec<u8> = (0..n).flat_map(wide_delta).flat_map(|x| x.to_le_bytes()).collect();
+    let sparse_indices: Vec<u8> = [3u16, 10].iter().flat_map(|i| i.to_le_bytes()).collect();
+    let sparse_values: Vec<u8> =
+        [[0.0f32, 0.0, 0.5], [0.0, 0.0, -0.5]].iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    let mut view = |bytes: &[u8]| {
+        let views = j["bufferViews"].as_array_mut().unwrap();
+        views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()}));
+        bin.extend_from_slice(bytes);
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        views.len() - 1
+    };
+    let (dense_view, index_view, value_view) = (view(&dense), view(&sparse_indices), view(&sparse_values));
+    let accessors = j["accessors"].as_array_mut().unwrap();
+    let extent = (n as f32 - 1.0) * 0.001;
+    accessors.push(json!({"bufferView": dense_view, "componentType": 5126, "count": n, "type": "VEC3",
+        "min": [0.0, 0.0, 0.0], "max": [extent, 0.0, 0.0]}));
+    accessors.push(json!({"componentType": 5126, "count": n, "type": "VEC3", "min": [0.0, 0.0, -0.5], "max": [0.0, 0.0, 0.5],
+        "sparse": {"count": 2, "indices": {"bufferView": index_view, "componentType": 5123},
+                   "values": {"bufferView": value_view}}}));
+    let (wide, blink) = (accessors.len() - 2, accessors.len() - 1);
+    j["buffers"][0]["byteLength"] = bin.len().into();
+    j["meshes"][0]["primitives"][0]["targets"] = json!([{"POSITION": wide}, {"POSITION": blink}]);
+    j["meshes"][0]["weights"] = json!([0.25, 0.0]);
+    j["meshes"][0]["extras"] = json!({"targetNames": ["wide", "blink"]});
+    let json = serde_json::to_vec(&j).unwrap();
+    gltf::binary::Glb { header: parsed.header, json: json.into(), bin: Some(bin.into()) }.to_vec().unwrap()
+}
+
+fn wide_delta(v: usize) -> [f32; 3] {
+    [v as f32 * 0.001, 0.0, 0.0]
+}
+
+/// Issue 42, item 3: morph targets are kept. Each kept vertex keeps its own deltas (the
+/// sparse target read and written dense), and the targets' names and default weights stay.
 #[test]
-fn morph_targets_are_refused() {
+fn issue_42_morph_targets_are_kept_with_each_kept_vertex_s_deltas() {
+    let bytes = limb_with_morph_targets();
+    let path = Path::new("limb.glb");
+    let (rig, source) = desal_rig::read_rig_and_document(path, &bytes, &ReadOptions::default()).unwrap();
+    let (posed, mesh, simp_to_welded) = simplify_limb(&rig, desal_simplify::Placement::Subset, 60, true);
+    let input = SimplifiedInput {
+        positions: &mesh.positions,
+        faces: &mesh.faces,
+        simp_to_welded: &simp_to_welded,
+        subset: true,
+    };
+    let targets = PoseTargets { joints: &posed.joints, positions: &posed.poses.poses };
+    let (out, _) = simplified_rig(&rig, &posed.weld, &input, &targets).unwrap();
+    let edited = desal_rig::write_edited(&source, &rig, &out).unwrap();
+    let (json, bin) = json_and_bin(&edited.bytes);
+    assert_eq!(json["meshes"][0]["weights"], serde_json::json!([0.25, 0.0]));
+    assert_eq!(json["meshes"][0]["extras"]["targetNames"], serde_json::json!(["wide", "blink"]));
+    let delta = |t: usize| -> Vec<[f32; 3]> {
+        let a = &json["accessors"]
+            [json["meshes"][0]["primitives"][0]["targets"][t]["POSITION"].as_u64().unwrap() as usize];
+        assert!(a.get("sparse").is_none() && a.get("min").is_some());
+        let floats: Vec<f32> = view_bytes(&json, &bin, &a["bufferView"])
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        floats.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+    };
+    let (wide, blink) = (delta(0), delta(1));
+    assert_eq!(wide.len(), out.mesh.vertex_count());
+    let mut blinking = 0;
+    for (v, &s) in out.mesh.sources.iter().enumerate() {
+        assert_eq!(wide[v], wide_delta(s as usize), "vertex {v}");
+        let expected = match s {
+            3 => [0.0, 0.0, 0.5],
+            10 => [0.0, 0.0, -0.5],
+            _ => [0.0; 3],
+        };
+        blinking += usize::from(expected != [0.0; 3]);
+        assert_eq!(blink[v], expected, "vertex {v}");
+    }
+    // Vertices 3 and 10 lie on the open end ring, which simplification keeps.
+    assert_eq!(blinking, 2, "both blinking vertices are kept");
+    // The output reads back.
+    read(&edited.bytes).unwrap();
+}
+
+/// A morph target with another count than its primitive's vertices is refused at read.
+#[test]
+fn a_morph_target_of_the_wrong_count_is_refused() {
     let bytes = edit_json(&write_glb(&limb()).unwrap(), |j| {
-        j["meshes"][0]["primitives"][0]["targets"] = serde_json::json!([{"POSITION": 0}]);
+        j["meshes"][0]["primitives"][0]["targets"] = serde_json::json!([{"POSITION": 5}]);
     });
     let m = message(read(&bytes));
-    assert!(m.contains("mesh 'limb' primitive 0 has 1 morph target(s)"), "{m}");
+    assert!(m.contains("mesh 'limb' primitive 0: morph target 0 POSITION has"), "{m}");
 }
 
 #[test]
