@@ -452,3 +452,58 @@ fn issue_42_a_vrm_avatar_keeps_its_document_and_its_images() {
     assert!(err.contains("avatar.vrm: image 'simplified/skin.png' would be written"), "{err}");
     assert!(!dir.path().join("out/avatar").exists(), "no partial output");
 }
+
+/// Issue 42, item 2: without `mesh`, every skinned mesh is simplified. The sample with a
+/// second skinned mesh (a copy of the body over the same accessors and skin) gives one
+/// pose set of both, never welded together, and a rig whose two meshes are both
+/// simplified; `simplified-rig.json` gives each mesh's vertex ranges, which follow one
+/// another; `mesh = "Body"` still picks the one.
+#[test]
+fn issue_42_every_skinned_mesh_is_simplified_with_a_table_of_its_vertices() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = std::fs::read(sample_rig()).unwrap();
+    let glb = gltf::binary::Glb::from_slice(&input).unwrap();
+    let mut json: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
+    let mut copy = json["meshes"][0].clone();
+    copy["name"] = "Copy".into();
+    json["meshes"].as_array_mut().unwrap().push(copy);
+    let skinned = json["nodes"].as_array().unwrap().iter().position(|n| n.get("skin").is_some()).unwrap();
+    let mut node = json["nodes"][skinned].clone();
+    node["name"] = "copy".into();
+    node["mesh"] = 1.into();
+    json["nodes"].as_array_mut().unwrap().push(node);
+    let last = json["nodes"].as_array().unwrap().len() - 1;
+    json["scenes"][0]["nodes"].as_array_mut().unwrap().push(last.into());
+    let json = serde_json::to_vec(&json).unwrap();
+    let bytes = gltf::binary::Glb { header: glb.header, json: json.into(), bin: glb.bin }.to_vec().unwrap();
+    let pipeline = write_rig_pipeline(dir.path(), &bytes, "target_vertices = 5352\nplacement = \"subset\"");
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let folder = dir.path().join("out/avatar");
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(folder.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["input"]["vertices"], 2 * 13380, "both meshes, never welded together");
+    let figures: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(folder.join("simplified-rig.json")).unwrap()).unwrap();
+    let meshes = figures["meshes"].as_array().unwrap();
+    assert_eq!(meshes.len(), 2, "{figures}");
+    assert_eq!(meshes[0]["pose_set_vertices"], serde_json::json!([0, 13380]));
+    assert_eq!(meshes[1]["pose_set_vertices"], serde_json::json!([13380, 26760]));
+    assert_eq!(meshes[0]["simplified_vertices"][1], meshes[1]["simplified_vertices"][0]);
+    assert_eq!(meshes[1]["simplified_vertices"][1], report["output"]["vertices"]);
+    assert_eq!(meshes[0]["output_vertices"][1], meshes[1]["output_vertices"][0]);
+    let written = read(&folder.join("simplified.glb"));
+    assert_eq!(written.meshes.len(), 2);
+    for part in &written.meshes {
+        assert!(part.vertices.len() < 13380 && !part.vertices.is_empty(), "{part:?}");
+    }
+
+    let text =
+        std::fs::read_to_string(&pipeline).unwrap().replace("frames = 11", "frames = 11\nmesh = \"Body\"");
+    std::fs::write(&pipeline, text).unwrap();
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(folder.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["input"]["vertices"], 13380, "mesh = \"Body\" picks one");
+}

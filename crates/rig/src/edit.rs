@@ -209,6 +209,23 @@ impl Editor<'_> {
             };
             attributes.insert(name, push(added, accessor));
         }
+        // JOINTS_n name the joints of the mesh's own skin, not the rig's merged one.
+        let part = self.input.meshes.iter().find(|m| m.mesh == span.mesh);
+        let mut local_joint = HashMap::new();
+        for (local, &joint) in part.map(|p| p.joints.as_slice()).unwrap_or_default().iter().enumerate() {
+            local_joint.entry(joint).or_insert(local as u16);
+        }
+        let to_local = |joint: usize| -> Result<u16, RigError> {
+            match part {
+                None => Ok(joint as u16),
+                Some(p) => local_joint.get(&(joint as u16)).copied().ok_or_else(|| {
+                    RigError::Output(format!(
+                        "mesh '{}' is weighted to joint {joint}, which its skin lacks",
+                        p.name
+                    ))
+                }),
+            }
+        };
         let influences = &out.influences;
         let widest = vertices.clone().map(|v| influences.of(v).count()).max().unwrap_or(0);
         for set in 0..widest.div_ceil(4).max(1) {
@@ -217,8 +234,11 @@ impl Editor<'_> {
             for v in vertices.clone() {
                 let row: Vec<(usize, f32)> = influences.of(v).skip(4 * set).take(4).collect();
                 for slot in 0..4 {
-                    let (j, w) = row.get(slot).copied().unwrap_or((0, 0.0));
-                    joints.extend((j as u16).to_le_bytes());
+                    let (j, w) = match row.get(slot) {
+                        Some(&(j, w)) => (to_local(j)?, w),
+                        None => (0, 0.0),
+                    };
+                    joints.extend(j.to_le_bytes());
                     weights.extend(w.to_le_bytes());
                 }
             }

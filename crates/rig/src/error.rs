@@ -32,8 +32,6 @@ pub enum RigError {
     Buffer { path: PathBuf, buffer: usize, reason: String },
     #[error("{path}: no skinned mesh (no node has both a mesh and a skin); desal needs a rigged body")]
     NoSkin { path: PathBuf },
-    #[error("{path}: {count} skinned meshes ({names}); name one with `mesh = \"...\"` in [dataset.rig]")]
-    SeveralSkinnedMeshes { path: PathBuf, count: usize, names: String },
     #[error("{path}: no skinned mesh or node is called '{wanted}'; the skinned meshes are: {names}")]
     NoSuchMesh { path: PathBuf, wanted: String, names: String },
     #[error("{path}: mesh '{mesh}' primitive {primitive}: {reason}")]

@@ -5,7 +5,7 @@
 //! rig into what desal's stages run on — a registered pose set and part labels — and
 //! turns the simplified mesh back into a rig that an engine loads:
 //!
-//! 1. [`read_rig`]: the node tree, the one skinned mesh (with UVs and normals), its skin
+//! 1. [`read_rig`]: the node tree, every skinned mesh as one (with UVs and normals), their skins
 //!    and the animations; the JSON parsed and validated by the `gltf` crate, every
 //!    accessor checked against the glTF 2.0 specification and read by desal; bad or
 //!    hostile input refused with the file and the element ([`RigError`]).

@@ -176,6 +176,25 @@ pub struct PrimitiveSpan {
     pub triangles: std::ops::Range<u32>,
 }
 
+/// One glTF mesh of a rig, skinned by one glTF skin: where it lies in [`Rig::mesh`] and
+/// how its skin's joints map to the rig's one [`Skin`] (the skins of every mesh merged,
+/// a joint per node and inverse bind matrix).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MeshPart {
+    /// The first node carrying it.
+    pub node: usize,
+    /// `meshes[mesh]` in the document.
+    pub mesh: usize,
+    pub name: String,
+    /// `skins[skin]` in the document.
+    pub skin: usize,
+    /// The rig joint of each joint of its skin.
+    pub joints: Vec<u16>,
+    /// Its split vertices and triangles in [`Rig::mesh`].
+    pub vertices: std::ops::Range<u32>,
+    pub triangles: std::ops::Range<u32>,
+}
+
 /// The skinned mesh: one triangle list over split vertices, with their attributes.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkinnedMesh {
@@ -209,7 +228,8 @@ impl SkinnedMesh {
     }
 }
 
-/// A skinned rig: the scene graph, the skin, the animations and the one skinned mesh.
+/// A skinned rig: the scene graph, the skin, the animations and the skinned meshes, as
+/// one mesh ([`Rig::mesh`], each glTF mesh a run of it: [`Rig::meshes`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rig {
     /// What reading did to the skinning weights (renormalised sums).
@@ -219,8 +239,11 @@ pub struct Rig {
     pub scenes: Vec<Vec<usize>>,
     /// The scene shown by default.
     pub scene: Option<usize>,
-    /// The node that carries the skinned mesh.
+    /// The node that carries the (first) skinned mesh.
     pub mesh_node: usize,
+    /// The glTF meshes [`Rig::mesh`] holds, in node order, each a run of its vertices and
+    /// triangles (empty for a rig built in memory: one mesh on [`Rig::mesh_node`]).
+    pub meshes: Vec<MeshPart>,
     pub skin: Skin,
     pub animations: Vec<Animation>,
     pub mesh: SkinnedMesh,

@@ -5,10 +5,12 @@
 //! checked against the specification's table and its buffer before it is read, so a
 //! hostile file is refused by name and never panics, allocates at will or is misread.
 //!
-//! What is read: the node tree and scenes; the one skinned mesh (the mesh of a node that
-//! has a skin; when there are several, [`ReadOptions::mesh`] picks one by mesh or node
-//! name) with `POSITION`, `NORMAL`, `TEXCOORD_0` and every `JOINTS_n`/`WEIGHTS_n` set, its
-//! triangle primitives concatenated; its skin; the animations' translation, rotation and
+//! What is read: the node tree and scenes; every skinned mesh (the mesh of a node that has
+//! a skin, in node order, a mesh carried by several nodes once; [`ReadOptions::mesh`]
+//! picks one by mesh or node name) with `POSITION`, `NORMAL`, `TEXCOORD_0` and every
+//! `JOINTS_n`/`WEIGHTS_n` set, their triangle primitives concatenated ([`MeshPart`] says
+//! where each mesh lies); their skins merged into one (a joint per node and inverse bind
+//! matrix, the first mesh's skin as it is); the animations' translation, rotation and
 //! scale channels. Morph targets (sparse ones too) and every other attribute are checked
 //! (one element per vertex, layout) and carried into the output by [`crate::edit`]: each
 //! kept vertex keeps its deltas. Buffers come from the GLB binary chunk, base64 `data:`
@@ -29,8 +31,8 @@ use crate::RigError;
 use crate::accessor::{Accessors, Semantic};
 use crate::edit::SourceDocument;
 use crate::model::{
-    Animation, Channel, Influences, Interpolation, LocalTransform, Node, Path as ChannelPath, PrimitiveSpan,
-    Rig, Skin, SkinnedMesh, WEIGHT_SUM_REPORTED, WeightSums,
+    Animation, Channel, Influences, Interpolation, LocalTransform, MeshPart, Node, Path as ChannelPath,
+    PrimitiveSpan, Rig, Skin, SkinnedMesh, WEIGHT_SUM_REPORTED, WeightSums,
 };
 
 /// How far a vertex's weights may sum from 1 and be kept as written. A vertex further off
@@ -62,7 +64,7 @@ const MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
 /// Options of [`read_rig`].
 #[derive(Debug, Clone, Default)]
 pub struct ReadOptions {
-    /// Which skinned mesh, by mesh name or node name, when the file has several.
+    /// Only this skinned mesh, by mesh or node name; `None`: every skinned mesh of the file.
     pub mesh: Option<String>,
 }
 
@@ -133,55 +135,76 @@ struct Reader<'a> {
 
 impl Reader<'_> {
     fn read(&self, options: &ReadOptions) -> Result<Rig, RigError> {
-        let (mesh_node, mesh, skin) = self.pick_skinned_mesh(options)?;
+        let chosen = self.pick_skinned_meshes(options)?;
         let nodes = self.document.nodes().map(|n| self.read_node(&n)).collect::<Result<Vec<_>, _>>()?;
-        let skin = self.read_skin(&skin, &nodes)?;
+        // One skin over every chosen mesh: the first mesh's skin as it is, then each other
+        // skin's joints matched to a joint of the same node and inverse bind matrix, or
+        // added (so a file with one skin gets exactly that skin).
+        let mut skin: Option<Skin> = None;
         let mut weight_sums = WeightSums::default();
-        let mesh = self.read_mesh(&mesh, &skin, &mut weight_sums)?;
+        let mut mesh: Option<SkinnedMesh> = None;
+        let mut parts = Vec::new();
+        for (node, gltf_mesh, gltf_skin) in &chosen {
+            let own = self.read_skin(gltf_skin, &nodes)?;
+            let joints = merge_skin(&mut skin, &own);
+            let mut part = self.read_mesh(gltf_mesh, &own, &mut weight_sums)?;
+            for j in &mut part.influences.joints {
+                *j = joints[usize::from(*j)];
+            }
+            let all = mesh.get_or_insert_with(|| SkinnedMesh { primitives: Vec::new(), ..part.clone() });
+            let (vertices, triangles) = append_mesh(all, part, parts.is_empty());
+            parts.push(MeshPart {
+                node: *node,
+                mesh: gltf_mesh.index(),
+                name: mesh_name(gltf_mesh),
+                skin: gltf_skin.index(),
+                joints,
+                vertices,
+                triangles,
+            });
+        }
+        let (skin, mesh) = (skin.expect("a mesh was chosen"), mesh.expect("a mesh was chosen"));
+        let mesh_node = parts[0].node;
         let scenes = self.document.scenes().map(|s| s.nodes().map(|n| n.index()).collect()).collect();
         let scene = self.document.default_scene().map(|s| s.index());
         self.check_keyframe_total()?;
         let animations =
             self.document.animations().map(|a| self.read_animation(&a)).collect::<Result<_, _>>()?;
-        let rig = Rig { weight_sums, nodes, scenes, scene, mesh_node, skin, animations, mesh };
+        let rig = Rig { weight_sums, nodes, scenes, scene, mesh_node, meshes: parts, skin, animations, mesh };
         check_tree(&self.path, &rig)?;
         Ok(rig)
     }
 
-    /// The node carrying the skinned mesh, the mesh and its skin.
-    fn pick_skinned_mesh(
+    /// The skinned meshes to simplify, each with the first node that carries it and its
+    /// skin, in node order: every one (a mesh carried by several nodes once), or the one
+    /// [`ReadOptions::mesh`] names by mesh or node name.
+    fn pick_skinned_meshes(
         &self,
         options: &ReadOptions,
-    ) -> Result<(usize, gltf::Mesh<'_>, gltf::Skin<'_>), RigError> {
-        let skinned: Vec<(gltf::Node, gltf::Mesh, gltf::Skin)> =
+    ) -> Result<Vec<(usize, gltf::Mesh<'_>, gltf::Skin<'_>)>, RigError> {
+        let mut skinned: Vec<(gltf::Node, gltf::Mesh, gltf::Skin)> =
             self.document.nodes().filter_map(|n| Some((n.clone(), n.mesh()?, n.skin()?))).collect();
+        if skinned.is_empty() {
+            return Err(RigError::NoSkin { path: self.path.clone() });
+        }
         let label = |(n, m, _): &(gltf::Node, gltf::Mesh, gltf::Skin)| {
             format!("'{}' (node '{}')", mesh_name(m), n.name().unwrap_or("unnamed"))
         };
-        let names = skinned.iter().map(label).collect::<Vec<_>>().join(", ");
-        let chosen = match &options.mesh {
-            None if skinned.is_empty() => return Err(RigError::NoSkin { path: self.path.clone() }),
-            None if skinned.len() > 1 => {
-                return Err(RigError::SeveralSkinnedMeshes {
-                    path: self.path.clone(),
-                    count: skinned.len(),
-                    names,
-                });
-            }
-            None => 0,
-            Some(wanted) => skinned
+        if let Some(wanted) = &options.mesh {
+            let names = skinned.iter().map(label).collect::<Vec<_>>().join(", ");
+            let chosen = skinned
                 .iter()
                 .position(|(n, m, _)| m.name() == Some(wanted) || n.name() == Some(wanted))
-                .ok_or_else(|| {
-                    if skinned.is_empty() {
-                        RigError::NoSkin { path: self.path.clone() }
-                    } else {
-                        RigError::NoSuchMesh { path: self.path.clone(), wanted: wanted.clone(), names }
-                    }
-                })?,
-        };
-        let (node, mesh, skin) = skinned.into_iter().nth(chosen).expect("in range");
-        Ok((node.index(), mesh, skin))
+                .ok_or_else(|| RigError::NoSuchMesh {
+                    path: self.path.clone(),
+                    wanted: wanted.clone(),
+                    names,
+                })?;
+            skinned = vec![skinned.swap_remove(chosen)];
+        }
+        let mut seen = std::collections::BTreeSet::new();
+        skinned.retain(|(_, m, _)| seen.insert(m.index()));
+        Ok(skinned.into_iter().map(|(n, m, s)| (n.index(), m, s)).collect())
     }
 
     fn read_skin(&self, skin: &gltf::Skin<'_>, nodes: &[Node]) -> Result<Skin, RigError> {
@@ -651,6 +674,66 @@ fn check_tree(path: &Path, rig: &Rig) -> Result<(), RigError> {
         }
     }
     Ok(())
+}
+
+/// Merges `own` (a skin of one mesh) into the rig's one skin, which `own` starts when
+/// there is none; returns the rig joint of each of `own`'s joints.
+fn merge_skin(skin: &mut Option<Skin>, own: &Skin) -> Vec<u16> {
+    let Some(skin) = skin else {
+        *skin = Some(own.clone());
+        return (0..own.joints.len() as u16).collect();
+    };
+    let key = |node: usize, m: &[f32; 16]| (node, m.map(f32::to_bits));
+    let mut index: std::collections::HashMap<_, u16> = std::collections::HashMap::new();
+    for (j, (&node, m)) in skin.joints.iter().zip(&skin.inverse_bind).enumerate() {
+        index.entry(key(node, m)).or_insert(j as u16);
+    }
+    own.joints
+        .iter()
+        .zip(&own.inverse_bind)
+        .map(|(&node, m)| {
+            *index.entry(key(node, m)).or_insert_with(|| {
+                skin.joints.push(node);
+                skin.inverse_bind.push(*m);
+                (skin.joints.len() - 1) as u16
+            })
+        })
+        .collect()
+}
+
+/// Appends `part` (one mesh, its joints already the rig's) to `all`, which holds it
+/// already when `first`; returns its vertex and triangle ranges in `all`.
+fn append_mesh(
+    all: &mut SkinnedMesh,
+    part: SkinnedMesh,
+    first: bool,
+) -> (std::ops::Range<u32>, std::ops::Range<u32>) {
+    if first {
+        all.primitives = part.primitives;
+        return (0..all.vertex_count() as u32, 0..all.triangles.len() as u32);
+    }
+    let (base, first_triangle) = (all.vertex_count() as u32, all.triangles.len() as u32);
+    all.name = format!("{}+{}", all.name, part.name);
+    all.positions.extend(&part.positions);
+    // An attribute is kept only when every mesh has it.
+    match (&mut all.normals, part.normals) {
+        (Some(a), Some(b)) => a.extend(b),
+        (normals, _) => *normals = None,
+    }
+    match (&mut all.uvs, part.uvs) {
+        (Some(a), Some(b)) => a.extend(b),
+        (uvs, _) => *uvs = None,
+    }
+    for v in 0..part.positions.len() {
+        all.influences.push_row(part.influences.of(v).map(|(j, w)| (j as u16, w)));
+    }
+    all.triangles.extend(part.triangles.iter().map(|t| t.map(|i| i + base)));
+    all.primitives.extend(part.primitives.into_iter().map(|p| PrimitiveSpan {
+        vertices: p.vertices.start + base..p.vertices.end + base,
+        triangles: p.triangles.start + first_triangle..p.triangles.end + first_triangle,
+        ..p
+    }));
+    (base..all.vertex_count() as u32, first_triangle..all.triangles.len() as u32)
 }
 
 /// Flat `[x, y, z, x, y, z, ...]` values as triples.

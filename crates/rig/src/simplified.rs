@@ -199,6 +199,14 @@ pub fn simplified_rig_with(
         sources,
     };
     let mut out = rig.clone();
+    // Each glTF mesh's run of the output: its primitives' runs, which follow one another.
+    for part in &mut out.meshes {
+        let runs: Vec<&PrimitiveSpan> = out_mesh.primitives.iter().filter(|p| p.mesh == part.mesh).collect();
+        let (first, last) = (runs.first(), runs.last());
+        let end = |r: Option<&&PrimitiveSpan>| r.map_or(0, |r| r.vertices.end);
+        part.vertices = first.map_or(end(last), |r| r.vertices.start)..end(last);
+        part.triangles = first.map_or(0, |r| r.triangles.start)..last.map_or(0, |r| r.triangles.end);
+    }
     out.mesh = out_mesh;
     Ok((out, report))
 }

@@ -106,6 +106,7 @@ fn limb() -> Rig {
         scenes: vec![vec![0, 2]],
         scene: Some(0),
         mesh_node: 2,
+        meshes: Vec::new(),
         skin: Skin {
             name: Some("skin".into()),
             joints: vec![0, 1],
@@ -352,6 +353,7 @@ fn the_simplified_limb_keeps_its_uv_seams_and_exact_weights_with_subset_placemen
 /// `rig` without what says where its mesh came from (its primitives, its source vertices).
 fn without_provenance(mut rig: Rig) -> Rig {
     rig.mesh.primitives.clear();
+    rig.meshes.clear();
     rig.mesh.sources.clear();
     rig
 }
@@ -472,22 +474,124 @@ fn a_mesh_without_a_skin_is_refused() {
     assert!(m.starts_with("limb.glb: no skinned mesh"), "{m}");
 }
 
+/// Issue 42, item 2: without `mesh`, every skinned mesh is read (a mesh carried by two
+/// nodes once); `mesh` picks one by mesh or node name.
 #[test]
-fn several_skinned_meshes_are_named_and_mesh_picks_one() {
+fn every_skinned_mesh_is_read_and_mesh_picks_one() {
     let bytes = edit_json(&write_glb(&limb()).unwrap(), |j| {
         j["nodes"].as_array_mut().unwrap().push(serde_json::json!({"name": "body2", "mesh": 0, "skin": 0}));
         j["scenes"][0]["nodes"].as_array_mut().unwrap().push(3.into());
     });
-    let m = message(read(&bytes));
-    assert!(
-        m.contains("2 skinned meshes ('limb' (node 'body'), 'limb' (node 'body2'))") && m.contains("mesh = "),
-        "{m}"
-    );
+    let one = read(&bytes).unwrap();
+    assert_eq!((one.meshes.len(), one.mesh_node), (1, 2), "one mesh, from its first node");
     let picked =
         read_rig_from(Path::new("limb.glb"), &bytes, &ReadOptions { mesh: Some("body2".into()) }).unwrap();
     assert_eq!(picked.mesh_node, 3);
     let m = message(read_rig_from(Path::new("limb.glb"), &bytes, &ReadOptions { mesh: Some("arm".into()) }));
     assert!(m.contains("no skinned mesh or node is called 'arm'"), "{m}");
+}
+
+/// The limb with a second skinned mesh, `sleeve`: the limb's own accessors (so the same
+/// positions) on node `sleeve`, skinned by a second skin over the same joints in the
+/// other order with the same inverse bind matrices.
+fn limb_and_sleeve() -> Vec<u8> {
+    let rig = limb();
+    let glb = write_glb(&rig).unwrap();
+    let parsed = gltf::binary::Glb::from_slice(&glb).unwrap();
+    let mut j: serde_json::Value = serde_json::from_slice(&parsed.json).unwrap();
+    let mut bin = parsed.bin.unwrap().into_owned();
+    let swapped: Vec<u8> = [rig.skin.inverse_bind[1], rig.skin.inverse_bind[0]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let views = j["bufferViews"].as_array_mut().unwrap();
+    views.push(serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": swapped.len()}));
+    let view = views.len() - 1;
+    bin.extend(swapped);
+    j["buffers"][0]["byteLength"] = bin.len().into();
+    let accessors = j["accessors"].as_array_mut().unwrap();
+    accessors
+        .push(serde_json::json!({"bufferView": view, "componentType": 5126, "count": 2, "type": "MAT4"}));
+    let ibm = accessors.len() - 1;
+    let mut sleeve = j["meshes"][0].clone();
+    sleeve["name"] = "sleeve".into();
+    j["meshes"].as_array_mut().unwrap().push(sleeve);
+    let mut skin = j["skins"][0].clone();
+    skin["joints"] = serde_json::json!([1, 0]);
+    skin["inverseBindMatrices"] = ibm.into();
+    j["skins"].as_array_mut().unwrap().push(skin);
+    j["nodes"].as_array_mut().unwrap().push(serde_json::json!({"name": "sleeve", "mesh": 1, "skin": 1}));
+    j["scenes"][0]["nodes"].as_array_mut().unwrap().push(3.into());
+    let json = serde_json::to_vec(&j).unwrap();
+    gltf::binary::Glb { header: parsed.header, json: json.into(), bin: Some(bin.into()) }.to_vec().unwrap()
+}
+
+/// Issue 42, item 2: two skinned meshes are one rig: their skins merged (joints matched by
+/// node and inverse bind matrix), their vertices never welded together, both simplified
+/// together and written back each into its own mesh, each with its own skin's joints.
+#[test]
+fn issue_42_two_skinned_meshes_are_simplified_together_and_written_apart() {
+    let bytes = limb_and_sleeve();
+    let (rig, source) =
+        desal_rig::read_rig_and_document(Path::new("limb.glb"), &bytes, &ReadOptions::default()).unwrap();
+    let single = limb();
+    assert_eq!(rig.skin.joints, single.skin.joints, "the second skin's joints are the first's");
+    assert_eq!(rig.meshes.len(), 2);
+    assert_eq!((rig.meshes[1].name.as_str(), rig.meshes[1].joints.as_slice()), ("sleeve", &[1u16, 0][..]));
+    let n = single.mesh.vertex_count() as u32;
+    assert_eq!((rig.meshes[0].vertices.clone(), rig.meshes[1].vertices.clone()), (0..n, n..2 * n));
+    // The sleeve shares the limb's JOINTS_0, which its skin reads the other way round.
+    let swapped = |v: usize| rig.mesh.influences.of(v).map(|(j, w)| (1 - j, w)).collect::<Vec<_>>();
+    assert!(
+        (0..n as usize).all(|v| swapped(v) == rig.mesh.influences.of(v + n as usize).collect::<Vec<_>>())
+    );
+    let weld = desal_rig::Weld::new(&rig.mesh);
+    assert_eq!(
+        weld.welded_count(),
+        2 * desal_rig::Weld::new(&single.mesh).welded_count(),
+        "never welded across"
+    );
+
+    let (posed, mesh, simp_to_welded) = simplify_limb(&rig, desal_simplify::Placement::Subset, 120, true);
+    let input = SimplifiedInput {
+        positions: &mesh.positions,
+        faces: &mesh.faces,
+        simp_to_welded: &simp_to_welded,
+        subset: true,
+    };
+    let targets = PoseTargets { joints: &posed.joints, positions: &posed.poses.poses };
+    let (out, _) = simplified_rig(&rig, &posed.weld, &input, &targets).unwrap();
+    assert_eq!(out.mesh.primitives.iter().map(|p| p.mesh).collect::<Vec<_>>(), [0, 1], "both meshes kept");
+    let edited = desal_rig::write_edited(&source, &rig, &out).unwrap();
+    let (json, bin) = json_and_bin(&edited.bytes);
+    assert_eq!(json["skins"], json_and_bin(&bytes).0["skins"], "both skins as they were");
+    let back = read(&edited.bytes).unwrap();
+    assert_eq!(back.meshes.len(), 2);
+    // Each written vertex is its source vertex, with its own skin's joint numbers: the
+    // sleeve's JOINTS_0 names its skin's joints ([1, 0]), so joint 0 there is the limb's 1.
+    let joints_of = |m: usize| -> Vec<u16> {
+        let a = &json["accessors"]
+            [json["meshes"][m]["primitives"][0]["attributes"]["JOINTS_0"].as_u64().unwrap() as usize];
+        view_bytes(&json, &bin, &a["bufferView"])
+            .chunks_exact(2)
+            .map(|c| u16::from_le_bytes([c[0], c[1]]))
+            .collect()
+    };
+    let (limb_joints, sleeve_joints) = (joints_of(0), joints_of(1));
+    assert_eq!(out.meshes[1].vertices.start, out.meshes[0].vertices.end);
+    for (part, input_part) in out.meshes.iter().zip(&rig.meshes) {
+        for v in part.vertices.clone() {
+            let s = out.mesh.sources[v as usize] as usize;
+            assert!(input_part.vertices.contains(&(s as u32)), "vertex {v} comes from its own mesh");
+            assert_eq!(out.mesh.positions[v as usize], rig.mesh.positions[s]);
+        }
+    }
+    let first_sleeve = out.mesh.primitives[1].vertices.start as usize;
+    let local = |v: usize| out.mesh.influences.of(v).map(|(j, _)| j as u16).collect::<Vec<_>>();
+    assert_eq!(limb_joints[..local(0).len()], local(0)[..]);
+    let sleeve_local: Vec<u16> = local(first_sleeve).iter().map(|&j| 1 - j).collect();
+    assert_eq!(sleeve_joints[..sleeve_local.len()], sleeve_local[..]);
 }
 
 /// Weights off 1 (quantised, as exporters write them) are renormalised and counted, the

@@ -50,7 +50,8 @@ pub enum RigParts {
 pub struct RigParams {
     /// The `.glb` or `.gltf` file (relative to the pipeline file).
     pub file: String,
-    /// Which skinned mesh, by mesh or node name, when the file has several.
+    /// One skinned mesh, by mesh or node name; unset: every skinned mesh of the file (a
+    /// mesh carried by several nodes once), simplified together.
     #[serde(default)]
     pub mesh: Option<String>,
     /// Where the frames come from. Default `animations`.
@@ -313,6 +314,51 @@ pub struct SimplifiedRigSummary {
     pub cross_chart_faces: usize,
     pub refitted_vertices: usize,
     pub max_influences: usize,
+    /// Each glTF mesh simplified, in node order: where its vertices are in the pose set
+    /// (`poses.dsa`), the simplified pose set (`simplified/*.ply`, `vertex_map.txt`) and
+    /// the written mesh, as `[first, end)` ranges.
+    pub meshes: Vec<MeshRanges>,
+}
+
+/// One row of [`SimplifiedRigSummary::meshes`].
+#[derive(Debug, Clone, Serialize)]
+pub struct MeshRanges {
+    pub name: String,
+    pub node: usize,
+    /// Welded vertices of the pose set.
+    pub pose_set_vertices: [u32; 2],
+    /// Vertices of the simplified pose set: stage 3 keeps each mesh's vertices apart and
+    /// in order, so they follow one another.
+    pub simplified_vertices: [u32; 2],
+    /// Vertices of its primitives in the written rig (seam copies included).
+    pub output_vertices: [u32; 2],
+}
+
+/// Each simplified mesh's vertex ranges: the pose set's from the weld, the simplified
+/// pose set's through stage 4's map, the output's from the simplified rig.
+fn mesh_ranges(input: &Rig, weld: &desal_rig::Weld, map: &MapV1, out: &Rig) -> Vec<MeshRanges> {
+    let welded_end =
+        |split_end: u32| (split_end as usize).checked_sub(1).map_or(0, |last| weld.split_to_welded[last] + 1);
+    let mut simplified_start = 0u32;
+    input
+        .meshes
+        .iter()
+        .zip(&out.meshes)
+        .map(|(part, written)| {
+            let welded = [welded_end(part.vertices.start), welded_end(part.vertices.end)];
+            let count =
+                map.simp_to_orig.iter().filter(|&&w| (welded[0]..welded[1]).contains(&w)).count() as u32;
+            let simplified = [simplified_start, simplified_start + count];
+            simplified_start += count;
+            MeshRanges {
+                name: part.name.clone(),
+                node: part.node,
+                pose_set_vertices: welded,
+                simplified_vertices: simplified,
+                output_vertices: [written.vertices.start, written.vertices.end],
+            }
+        })
+        .collect()
 }
 
 /// The simplified rig: the input document with the simplified mesh's primitives in place
@@ -343,6 +389,7 @@ pub fn simplified_glb(
         cross_chart_faces: report.cross_chart_faces,
         refitted_vertices: report.refitted_vertices,
         max_influences: report.max_influences,
+        meshes: mesh_ranges(&rig, &posed.weld, map, &out),
     };
     Ok((edited, summary))
 }
