@@ -67,8 +67,10 @@ pub struct SimplifiedReport {
 /// How many influences each simplified vertex keeps.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct WeightOptions {
-    /// At most this many influences per vertex (at least 1): subset placement keeps a
-    /// vertex's largest weights, renormalised, and the refit fits at most this many.
+    /// At most this many influences per vertex (at least 1): subset placement keeps, of a
+    /// vertex with more, the ones of its own joints that skin it closest over the poses
+    /// (refitted, or its largest renormalised when they do better), and the refit fits at
+    /// most this many.
     /// `None`: subset placement keeps the exact weights, however many (the sample has up
     /// to 7), and the refit keeps at most [`MAX_INFLUENCES`].
     pub max_influences: Option<usize>,
@@ -212,8 +214,9 @@ pub fn simplified_rig_with(
 }
 
 /// The joints and weights of every simplified vertex (`simp` space), and how many were
-/// refitted. Subset placement: the mapped welded vertex's exact weights (its largest
-/// `max_influences`, renormalised, when capped). Optimal placement: the least-squares
+/// refitted. Subset placement: the mapped welded vertex's exact weights (when capped, at
+/// most `max_influences` of its own joints fitted over `targets`: [`capped_weights`]).
+/// Optimal placement: the least-squares
 /// refit over `targets` ([`refit_vertex`]). `desal eval` calls this with the training
 /// poses of each fold, so a held-out pose never reaches the weights it is skinned with.
 pub fn simplified_influences(
@@ -231,9 +234,9 @@ pub fn simplified_influences(
                 let representative = weld.copies_of(welded as usize)[0] as usize;
                 let exact = mesh.influences.of(representative);
                 match options.max_influences {
-                    Some(limit) if mesh.influences.of(representative).count() > limit => to_f32_weights(
-                        &largest_normalised(exact.map(|(j, w)| (j, f64::from(w))).collect(), limit),
-                    ),
+                    Some(limit) if mesh.influences.of(representative).count() > limit => {
+                        capped_weights(mesh, representative, welded as usize, targets, limit)
+                    }
                     _ => exact.map(|(j, w)| (j as u16, w)).collect(),
                 }
             })
@@ -380,6 +383,32 @@ fn refit_vertex(
         _ => (own, false),
     };
     (to_f32_weights(&weights), refitted)
+}
+
+/// At most `limit` of the split vertex `representative`'s own joints (welded vertex
+/// `welded`), weighted to skin it as closely as they can to where all its joints put it
+/// over the poses of `targets`: the non-negative least-squares refit over its own joints
+/// ([`fit_weights`]) when it skins closer than its `limit` largest weights renormalised
+/// (which it never does only when they are already the best), else those.
+fn capped_weights(
+    mesh: &SkinnedMesh,
+    representative: usize,
+    welded: usize,
+    targets: &PoseTargets,
+    limit: usize,
+) -> Vec<(u16, f32)> {
+    let own: Vec<(usize, f64)> = mesh.influences.of(representative).map(|(j, w)| (j, f64::from(w))).collect();
+    let largest = largest_normalised(own.clone(), limit);
+    let p = mesh.positions[representative];
+    let x = Vec3::new(p[0].into(), p[1].into(), p[2].into());
+    let y: Vec<Vec3> = targets.positions.iter().map(|pose| pose[welded]).collect();
+    let joints: Vec<usize> = own.iter().map(|w| w.0).collect();
+    let largest_residual = residual(&x, &largest, targets.joints, &y);
+    let weights = match fit_weights(&x, &joints, targets.joints, &y, limit) {
+        Some((fit, r)) if r < largest_residual => fit,
+        _ => largest,
+    };
+    to_f32_weights(&weights)
 }
 
 /// The `limit` largest weights, renormalised.

@@ -974,3 +974,50 @@ fn issue_42_the_simplified_document_changes_only_the_simplified_primitive() {
     }
     assert!(out.mesh.vertex_count() < rig.mesh.vertex_count());
 }
+
+/// Issue 42, item 5: capping a kept vertex's influences keeps the joints that skin it
+/// best, not the largest weights. Three joints weigh 0.4, 0.35 and 0.25; the first two
+/// never move apart and the third slides, so the two largest (renormalised) miss the
+/// slide in every pose, while the lightest joint with the first two's weight together
+/// follows it exactly.
+#[test]
+fn issue_42_capped_influences_keep_the_joints_that_skin_best() {
+    let mut influences = Influences::new();
+    for _ in 0..3 {
+        influences.push_row([(0, 0.4), (1, 0.35), (2, 0.25)]);
+    }
+    let mesh = SkinnedMesh {
+        name: "tri".into(),
+        positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        normals: None,
+        uvs: None,
+        influences,
+        triangles: vec![[0, 1, 2]],
+        primitives: Vec::new(),
+        sources: Vec::new(),
+    };
+    let weld = desal_rig::Weld::new(&mesh);
+    let x: Vec<Vec3> =
+        mesh.positions.iter().map(|p| Vec3::new(p[0].into(), p[1].into(), p[2].into())).collect();
+    let joints: Vec<Vec<desal_mesh::math::Mat4>> = (0..4)
+        .map(|k| {
+            let slide = desal_mesh::math::Mat4::new_translation(&Vec3::new(f64::from(k), 0.0, 0.0));
+            vec![desal_mesh::math::Mat4::identity(), desal_mesh::math::Mat4::identity(), slide]
+        })
+        .collect();
+    let positions: Vec<Vec<Vec3>> = (0..4).map(|k| skin_points(&x, &mesh.influences, &joints[k])).collect();
+    let input =
+        SimplifiedInput { positions: &x, faces: &[[0, 1, 2]], simp_to_welded: &[0, 1, 2], subset: true };
+    let targets = PoseTargets { joints: &joints, positions: &positions };
+    let options = desal_rig::WeightOptions { max_influences: Some(2) };
+    let (rows, _) = desal_rig::simplified_influences(&mesh, &weld, &input, &targets, &options);
+    for row in rows {
+        assert_eq!(row.len(), 2, "{row:?}");
+        let slide = row.iter().find(|w| w.0 == 2).expect("the sliding joint is kept");
+        assert!((slide.1 - 0.25).abs() < 1e-5, "{row:?}");
+        assert!((row.iter().map(|w| w.1).sum::<f32>() - 1.0).abs() < 1e-6);
+    }
+    // Uncapped, the weights are the exact ones.
+    let (rows, _) = desal_rig::simplified_influences(&mesh, &weld, &input, &targets, &Default::default());
+    assert_eq!(rows[0], [(0, 0.4), (1, 0.35), (2, 0.25)]);
+}

@@ -72,14 +72,35 @@ pub struct RigParams {
     /// Fewest vertices a joint's part may have before it joins its parent. Default 50.
     #[serde(default = "default_min_part_vertices")]
     pub min_part_vertices: usize,
-    /// At most this many joint influences per vertex of `simplified.glb` (e.g. 4 for an
-    /// engine that skins `JOINTS_0` only): subset placement keeps each vertex's largest
-    /// weights, renormalised; the refit fits at most this many. Unset: subset placement
-    /// keeps the exact weights, the refit at most 4. Left out of the ingest key's
-    /// parameters when unset, so that caches made before it existed still match.
+    /// At most this many joint influences per vertex of `simplified.glb`, or `"all"`.
+    /// Default 4 ([`DEFAULT_MAX_INFLUENCES`]: one `JOINTS_0` set, what Unity, three.js and
+    /// most engines skin). Subset placement gives a vertex with more the ones of its own
+    /// joints that skin it closest over the poses, renormalised; the refit fits at most
+    /// this many. `"all"`: subset placement keeps the exact weights, the refit at most 4.
+    /// Left out of the ingest key's parameters when unset, so that caches made before it
+    /// existed still match (it shapes the output only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub max_influences: Option<usize>,
+    pub max_influences: Option<MaxInfluences>,
 }
+
+/// `max_influences = N | "all"`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(untagged)]
+pub enum MaxInfluences {
+    Count(usize),
+    All(AllInfluences),
+}
+
+/// The word `"all"` of [`MaxInfluences`].
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum AllInfluences {
+    All,
+}
+
+/// Influences per vertex of the simplified rig when `max_influences` is unset (issue 42,
+/// item 5): engines skin 4.
+pub const DEFAULT_MAX_INFLUENCES: usize = 4;
 
 fn default_frames() -> usize {
     FrameConfig::default().frames
@@ -118,10 +139,15 @@ impl RigParams {
 
     /// The weight settings of the simplified rig, validated.
     pub fn weight_options(&self) -> Result<desal_rig::WeightOptions> {
-        if self.max_influences == Some(0) {
-            bail!("rig.max_influences must be at least 1 (a vertex needs a joint to follow)");
-        }
-        Ok(desal_rig::WeightOptions { max_influences: self.max_influences })
+        let max_influences = match self.max_influences {
+            None => Some(DEFAULT_MAX_INFLUENCES),
+            Some(MaxInfluences::Count(0)) => {
+                bail!("rig.max_influences must be at least 1 (a vertex needs a joint to follow), or \"all\"")
+            }
+            Some(MaxInfluences::Count(n)) => Some(n),
+            Some(MaxInfluences::All(_)) => None,
+        };
+        Ok(desal_rig::WeightOptions { max_influences })
     }
 
     pub fn parts_config(&self) -> Result<desal_rig::PartsConfig> {
@@ -379,7 +405,10 @@ pub fn simplified_glb(
         placement: simplified.placement.clone(),
         weights: match (subset, options.max_influences) {
             (true, None) => "exact (subset placement)",
-            (true, Some(_)) => "exact, capped at max_influences and renormalised (subset placement)",
+            (true, Some(_)) => {
+                "exact, capped at max_influences: of a vertex with more, the ones of its own joints that skin it \
+                 closest over the poses (subset placement)"
+            }
             (false, _) => "least-squares refit over the pose set",
         },
         simplified_vertices: report.simplified_vertices,
@@ -460,7 +489,7 @@ mod tests {
             RigParams { frames: 61, ..base.clone() },
             RigParams { seed: 1, ..base.clone() },
             RigParams { max_degrees: 31.0, ..base.clone() },
-            RigParams { max_influences: Some(4), ..base.clone() },
+            RigParams { max_influences: Some(MaxInfluences::Count(4)), ..base.clone() },
         ];
         for v in &variants {
             assert_ne!(key(&a, v), reference, "{v:?}");
@@ -482,8 +511,17 @@ mod tests {
         assert!(RigParams { frames: 0, ..p.clone() }.frame_config().is_err());
         assert!(RigParams { max_degrees: 200.0, ..p.clone() }.frame_config().is_err());
         assert!(RigParams { min_part_vertices: 2, ..p.clone() }.parts_config().is_err());
-        assert!(RigParams { max_influences: Some(0), ..p.clone() }.weight_options().is_err());
-        assert_eq!(p.weight_options().unwrap().max_influences, None);
+        assert!(
+            RigParams { max_influences: Some(MaxInfluences::Count(0)), ..p.clone() }
+                .weight_options()
+                .is_err()
+        );
+        assert_eq!(p.weight_options().unwrap().max_influences, Some(4), "engines skin 4");
+        let all: RigParams = toml::from_str("file = \"a.glb\"\nmax_influences = \"all\"").unwrap();
+        assert_eq!(all.weight_options().unwrap().max_influences, None);
+        let eight: RigParams = toml::from_str("file = \"a.glb\"\nmax_influences = 8").unwrap();
+        assert_eq!(eight.weight_options().unwrap().max_influences, Some(8));
+        assert!(toml::from_str::<RigParams>("file = \"a.glb\"\nmax_influences = \"some\"").is_err());
         let both: RigParams = toml::from_str("file = \"a.glb\"\nposes = \"both\"").unwrap();
         assert_eq!(both.poses, PosesFrom::Both);
         assert!(toml::from_str::<RigParams>("file = \"a.glb\"\nposes = \"all\"").is_err());
