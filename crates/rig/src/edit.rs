@@ -15,15 +15,16 @@
 //!   accessor moves: the new accessors take the slots of the accessors only the
 //!   simplified primitives used, in ascending order, then go at the end. A freed slot
 //!   left over (the new primitives need fewer accessors, e.g. no `JOINTS_1` once
-//!   influences are capped at 4) becomes a one-element accessor of one zero (4 bytes,
-//!   one view shared by all such slots): valid, unused.
-//! - **Buffer views and buffers.** Every kept buffer view is copied into one new binary
-//!   chunk (4-byte aligned, renumbered in order; accessors and images follow), the new
-//!   accessors' data after them, and `buffers` becomes that one chunk. Views that only
-//!   freed accessors used are dropped; views nothing names are kept (an extension may).
+//!   influences are capped at 4) becomes a one-element accessor of one zero (one 4-byte
+//!   view shared by all such slots): valid, unused.
+//! - **Buffer views and buffers.** Every buffer view is copied, in order, into one new
+//!   binary chunk (4-byte aligned), and `buffers` becomes that one chunk. No kept view
+//!   moves either (images, and extensions desal does not know, name views by index): the
+//!   new accessors' views take the slots of views only freed accessors used, then go at
+//!   the end; a freed view slot left over holds four zero bytes. Views nothing names are
+//!   kept (an extension may name them).
 //! - **Nothing else.** Nodes, names, scenes, skins, animations, materials, textures,
-//!   samplers, images (their bytes move within the chunk; their `bufferView` index may
-//!   change), cameras, extensions (`KHR_*`, `VRM`, `VRMC_*`), `extensionsUsed` and
+//!   samplers, images (their bytes move within the chunk, their view stays), cameras, extensions (`KHR_*`, `VRM`, `VRMC_*`), `extensionsUsed` and
 //!   `extras` are the input's values. An image given by a URI keeps it: its bytes, read
 //!   inside the input's folder ([`desal_io::confine::read_inside`]), come back in
 //!   [`EditedGlb::images`] for the caller to write beside the output under the same
@@ -366,8 +367,11 @@ impl Editor<'_> {
         Ok(())
     }
 
-    /// The new binary chunk: every kept buffer view's bytes, then the new accessors' (one
-    /// view each); `buffers`, `bufferViews` and every reference to a view rewritten.
+    /// The new binary chunk: every kept buffer view's bytes and the new accessors' (one
+    /// view each), in view order; `buffers` and `bufferViews` rewritten. No kept view
+    /// moves (images and extensions name views by index): the new accessors' views take
+    /// the slots of the views only freed accessors used, then go at the end, and a freed
+    /// view slot left over holds four zero bytes, as do the leftover accessor slots.
     fn rebuild_buffers(
         &self,
         json: &mut Value,
@@ -375,24 +379,22 @@ impl Editor<'_> {
         added: Vec<NewAccessor>,
         slots: &[usize],
     ) -> Result<Vec<u8>, RigError> {
+        /// What a view of the output holds.
+        enum Content {
+            Kept,
+            New(NewAccessor),
+            Zero,
+        }
         let views = json["bufferViews"].as_array().cloned().unwrap_or_default();
-        // A view is dropped when freed accessors name it and nothing else does.
+        // A view is freed when freed accessors name it and nothing else does.
         let mut named_by_kept = vec![false; views.len()];
         let mut named_by_freed = vec![false; views.len()];
-        let accessor_views = |accessor: &Value| -> Vec<usize> {
-            let mut out = Vec::new();
-            for pointer in ["/bufferView", "/sparse/indices/bufferView", "/sparse/values/bufferView"] {
-                if let Some(v) = accessor.pointer(pointer).and_then(Value::as_u64) {
-                    out.push(v as usize);
-                }
-            }
-            out
-        };
-        let original_accessors = self.source.json["accessors"].as_array().cloned().unwrap_or_default();
-        for (a, accessor) in original_accessors.iter().enumerate() {
+        for (a, accessor) in self.source.json["accessors"].as_array().into_iter().flatten().enumerate() {
             let named = if freed.contains(&a) { &mut named_by_freed } else { &mut named_by_kept };
-            for v in accessor_views(accessor) {
-                if let Some(n) = named.get_mut(v) {
+            for pointer in ["/bufferView", "/sparse/indices/bufferView", "/sparse/values/bufferView"] {
+                if let Some(n) =
+                    accessor.pointer(pointer).and_then(Value::as_u64).and_then(|v| named.get_mut(v as usize))
+                {
                     *n = true;
                 }
             }
@@ -402,90 +404,91 @@ impl Editor<'_> {
                 *v = true;
             }
         }
-        let mut bin = Vec::new();
-        let mut new_views = Vec::new();
-        let mut renumber = vec![None; views.len()];
-        for (v, view) in views.iter().enumerate() {
-            if named_by_freed[v] && !named_by_kept[v] {
-                continue;
-            }
-            let bad = |reason: String| RigError::Structure {
-                path: self.source.path.clone(),
-                element: format!("buffer view {v}"),
-                reason,
-            };
-            let buffer = view["buffer"].as_u64().unwrap_or(0) as usize;
-            let offset = view["byteOffset"].as_u64().unwrap_or(0) as usize;
-            let length = view["byteLength"].as_u64().unwrap_or(0) as usize;
-            let bytes = self
-                .source
-                .buffers
-                .get(buffer)
-                .and_then(|b| b.get(offset..offset.checked_add(length)?))
-                .ok_or_else(|| bad(format!("bytes {offset}..+{length} lie outside buffer {buffer}")))?;
-            align(&mut bin);
-            let mut view = view.clone();
-            view["buffer"] = 0.into();
-            view["byteOffset"] = bin.len().into();
-            bin.extend_from_slice(bytes);
-            renumber[v] = Some(new_views.len());
-            new_views.push(view);
-        }
-        let accessors = json["accessors"].as_array_mut().expect("placed");
-        for (a, accessor) in accessors.iter_mut().enumerate() {
-            if a < original_accessors.len() && !freed.contains(&a) {
-                for pointer in ["/bufferView", "/sparse/indices/bufferView", "/sparse/values/bufferView"] {
-                    if let Some(slot) = accessor.pointer_mut(pointer)
-                        && let Some(v) = slot.as_u64()
-                    {
-                        *slot = renumber[v as usize].expect("a view a kept accessor names is kept").into();
-                    }
-                }
-            }
-        }
-        for image in json.get_mut("images").and_then(Value::as_array_mut).into_iter().flatten() {
-            if let Some(v) = image["bufferView"].as_u64() {
-                image["bufferView"] = renumber[v as usize].expect("an image's view is kept").into();
-            }
+        let free: Vec<usize> = (0..views.len()).filter(|&v| named_by_freed[v] && !named_by_kept[v]).collect();
+        let mut contents: Vec<Content> = (0..views.len()).map(|_| Content::Kept).collect();
+        for &v in &free {
+            contents[v] = Content::Zero;
         }
         for (k, a) in added.into_iter().enumerate() {
-            align(&mut bin);
-            let mut view = json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": a.bytes.len()});
-            if let Some(target) = a.target {
-                view["target"] = target.into();
-                // Vertex attribute elements start on 4-byte boundaries (glTF 2.0 §3.6.2.4).
-                if !a.element.is_multiple_of(4) {
-                    view["byteStride"] = a.element.next_multiple_of(4).into();
-                }
-            }
-            let stride = view["byteStride"].as_u64().map_or(a.element, |s| s as usize);
-            for element in a.bytes.chunks_exact(a.element) {
-                bin.extend_from_slice(element);
-                bin.extend(std::iter::repeat_n(0, stride - a.element));
-            }
-            if stride != a.element {
-                // The last element needs no padding after it.
-                bin.truncate(bin.len() - (stride - a.element));
-                view["byteLength"] = (a.bytes.len() / a.element * stride - (stride - a.element)).into();
-            }
-            let mut accessor = Value::Object(a.json);
-            accessor["bufferView"] = new_views.len().into();
+            let v = free.get(k).copied().unwrap_or(contents.len());
+            let mut accessor = Value::Object(a.json.clone());
+            accessor["bufferView"] = v.into();
             json["accessors"][slots[k]] = accessor;
-            new_views.push(view);
+            if v == contents.len() {
+                contents.push(Content::New(a));
+            } else {
+                contents[v] = Content::New(a);
+            }
         }
-        // Freed slots left over point at one zero (readers such as the `gltf` crate want a
-        // buffer view even where glTF allows none).
+        // Freed accessor slots left over point at a zero.
         let leftovers: Vec<usize> = freed.iter().copied().skip(slots.len()).collect();
         if !leftovers.is_empty() {
-            align(&mut bin);
-            for &a in &leftovers {
-                json["accessors"][a]["bufferView"] = new_views.len().into();
+            let zero = free.get(slots.len()).copied().unwrap_or(contents.len());
+            if zero == contents.len() {
+                contents.push(Content::Zero);
             }
-            new_views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": 4}));
-            bin.extend([0; 4]);
+            for &a in &leftovers {
+                json["accessors"][a]["bufferView"] = zero.into();
+            }
+        }
+        let mut bin = Vec::new();
+        let mut out_views = Vec::with_capacity(contents.len());
+        for (v, content) in contents.into_iter().enumerate() {
+            align(&mut bin);
+            let offset = bin.len();
+            let view = match content {
+                Content::Kept => {
+                    let view = &views[v];
+                    let buffer = view["buffer"].as_u64().unwrap_or(0) as usize;
+                    let start = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+                    let length = view["byteLength"].as_u64().unwrap_or(0) as usize;
+                    let bytes = self
+                        .source
+                        .buffers
+                        .get(buffer)
+                        .and_then(|b| b.get(start..start.checked_add(length)?))
+                        .ok_or_else(|| RigError::Structure {
+                            path: self.source.path.clone(),
+                            element: format!("buffer view {v}"),
+                            reason: format!("bytes {start}..+{length} lie outside buffer {buffer}"),
+                        })?;
+                    bin.extend_from_slice(bytes);
+                    let mut view = view.clone();
+                    view["buffer"] = 0.into();
+                    view["byteOffset"] = offset.into();
+                    view
+                }
+                Content::New(a) => {
+                    let mut view = json!({"buffer": 0, "byteOffset": offset});
+                    // Vertex attribute elements start on 4-byte boundaries (glTF 2.0 §3.6.2.4).
+                    let stride = match a.target {
+                        Some(ARRAY_BUFFER) if !a.element.is_multiple_of(4) => a.element.next_multiple_of(4),
+                        _ => a.element,
+                    };
+                    for (e, element) in a.bytes.chunks_exact(a.element).enumerate() {
+                        if e > 0 {
+                            bin.extend(std::iter::repeat_n(0, stride - a.element));
+                        }
+                        bin.extend_from_slice(element);
+                    }
+                    view["byteLength"] = (bin.len() - offset).into();
+                    if let Some(target) = a.target {
+                        view["target"] = target.into();
+                    }
+                    if stride != a.element {
+                        view["byteStride"] = stride.into();
+                    }
+                    view
+                }
+                Content::Zero => {
+                    bin.extend([0; 4]);
+                    json!({"buffer": 0, "byteOffset": offset, "byteLength": 4})
+                }
+            };
+            out_views.push(view);
         }
         align(&mut bin);
-        json["bufferViews"] = new_views.into();
+        json["bufferViews"] = out_views.into();
         json["buffers"] = json!([{"byteLength": bin.len()}]);
         Ok(bin)
     }
@@ -550,7 +553,7 @@ fn freed_accessors(json: &Value, replaced: &BTreeSet<(usize, usize)>) -> BTreeSe
 
 /// The slot of each of `count` new accessors: the freed slots ascending, then new ones at
 /// the end of `accessors`; freed slots left over become one-element accessors (their
-/// zero is added by [`Editor::rebuild_buffers`]).
+/// zero's view is added by `Editor::rebuild_buffers`).
 fn place_accessors(json: &mut Value, freed: &BTreeSet<usize>, count: usize) -> Vec<usize> {
     if !json["accessors"].is_array() {
         json["accessors"] = json!([]);
