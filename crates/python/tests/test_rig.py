@@ -47,7 +47,7 @@ def test_simplify_rig_writes_the_cli_bytes(cli, tmp_path):
     report = desal.simplify_rig(RIG, out, **SETTINGS)
     assert out.read_bytes() == cli
     assert report["rig"]["simplified_vertices"] == 2676
-    assert report["rig"]["weights"] == "exact (subset placement)"
+    assert report["rig"]["weights"].startswith("exact, capped at max_influences"), "4 by default"
     assert report["ingest"]["poses"] == 8, "the bind pose and 7 frames"
     assert report["glb"] == out
 

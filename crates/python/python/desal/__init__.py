@@ -332,9 +332,11 @@ def simplify_rig(
 
     The rig is posed by linear blend skinning at ``frames`` frames of its animations
     (``poses="animations"``), of seeded random joint turns (``"random"``) or both; its
-    UV/normal seams are welded for simplification and kept in the output. ``mesh``
-    picks the skinned mesh when the file has several. The output has the input's
-    skeleton, inverse bind matrices and animations; with ``placement="subset"`` every
+    UV/normal seams are welded for simplification and kept in the output. Every skinned
+    mesh is simplified, together; ``mesh`` picks one. The output is the input document
+    with only the simplified primitives changed (every other mesh, material, texture,
+    animation, morph target and extension kept; images the file names by a relative path
+    are written beside ``out``); with ``placement="subset"`` every
     kept vertex keeps its exact weights, with ``"optimal"`` at most 4 weights are
     refitted over the poses; ``max_influences`` caps both (default 4, what engines skin: a
     subset vertex with more keeps the ones of its own joints that skin it closest over the
