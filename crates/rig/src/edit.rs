@@ -198,20 +198,27 @@ impl Editor<'_> {
             added.push(a);
             added.len() - 1
         };
+        let part = self.input.meshes.iter().find(|m| m.mesh == span.mesh);
+        // A rigid mesh (below a bone, no skin) stays rigid: its own positions, no weights.
+        let rigid = part.and_then(|p| p.to_bind);
         let names = original["attributes"].as_object().map(|m| m.keys().cloned().collect::<Vec<_>>());
         for name in names.unwrap_or_default() {
-            if name.starts_with("JOINTS_") || name.starts_with("WEIGHTS_") {
+            if rigid.is_none() && (name.starts_with("JOINTS_") || name.starts_with("WEIGHTS_")) {
                 continue;
             }
-            let accessor = if name == "POSITION" {
-                positions(&out.positions[vertices.clone()])
-            } else {
-                self.carried(span, &["attributes", &name], cache, &used_by(&name))?
+            let accessor = match (name.as_str(), rigid) {
+                ("POSITION", None) => positions(&out.positions[vertices.clone()]),
+                ("POSITION", Some(to_bind)) => {
+                    self.rigid_positions(span, &to_bind, cache, &used_by(&name))?
+                }
+                _ => self.carried(span, &["attributes", &name], cache, &used_by(&name))?,
             };
             attributes.insert(name, push(added, accessor));
         }
+        if rigid.is_some() {
+            return self.finish_primitive(span, attributes, added, cache);
+        }
         // JOINTS_n name the joints of the mesh's own skin, not the rig's merged one.
-        let part = self.input.meshes.iter().find(|m| m.mesh == span.mesh);
         let mut local_joint = HashMap::new();
         for (local, &joint) in part.map(|p| p.joints.as_slice()).unwrap_or_default().iter().enumerate() {
             local_joint.entry(joint).or_insert(local as u16);
@@ -249,6 +256,24 @@ impl Editor<'_> {
             attributes.insert(format!("JOINTS_{set}"), push(added, j));
             attributes.insert(format!("WEIGHTS_{set}"), push(added, w));
         }
+        self.finish_primitive(span, attributes, added, cache)
+    }
+
+    /// The rest of a new primitive: its indices and morph targets.
+    fn finish_primitive(
+        &self,
+        span: &PrimitiveSpan,
+        attributes: BTreeMap<String, usize>,
+        added: &mut Vec<NewAccessor>,
+        cache: &mut HashMap<usize, Elements>,
+    ) -> Result<NewPrimitive, RigError> {
+        let out = &self.simplified.mesh;
+        let original = &self.source.json["meshes"][span.mesh]["primitives"][span.primitive];
+        let used_by = |what: &str| format!("mesh {} primitive {} {what}", span.mesh, span.primitive);
+        let push = |added: &mut Vec<NewAccessor>, a: NewAccessor| {
+            added.push(a);
+            added.len() - 1
+        };
         let start = span.vertices.start;
         let triangles = &out.triangles[span.triangles.start as usize..span.triangles.end as usize];
         let indices: Vec<u8> = triangles.iter().flatten().flat_map(|&i| (i - start).to_le_bytes()).collect();
@@ -269,6 +294,39 @@ impl Editor<'_> {
             targets.push(target);
         }
         Ok(NewPrimitive { mesh: span.mesh, primitive: span.primitive, attributes, indices, targets })
+    }
+
+    /// A rigid primitive's `POSITION` in its own space: the input's elements as stored
+    /// when every vertex is an input vertex (subset placement), else the rig's positions
+    /// taken back out of the bind space (`to_bind` inverted), as `f32`.
+    fn rigid_positions(
+        &self,
+        span: &PrimitiveSpan,
+        to_bind: &desal_mesh::math::Mat4,
+        cache: &mut HashMap<usize, Elements>,
+        used_by: &str,
+    ) -> Result<NewAccessor, RigError> {
+        let out = &self.simplified.mesh;
+        let vertices = span.vertices.start as usize..span.vertices.end as usize;
+        let kept =
+            vertices.clone().all(|v| out.positions[v] == self.input.mesh.positions[out.sources[v] as usize]);
+        if kept {
+            return self.carried(span, &["attributes", "POSITION"], cache, used_by);
+        }
+        let back = to_bind.try_inverse().ok_or_else(|| {
+            RigError::Output(format!("{used_by}: the rigid mesh's placement in the bind space is singular"))
+        })?;
+        let local: Vec<[f32; 3]> = out.positions[vertices]
+            .iter()
+            .map(|p| {
+                let q = crate::pose::transform_point(
+                    &back,
+                    &desal_mesh::Vec3::new(p[0].into(), p[1].into(), p[2].into()),
+                );
+                [q.x as f32, q.y as f32, q.z as f32]
+            })
+            .collect();
+        Ok(positions(&local))
     }
 
     /// The accessor at `key` (`["attributes", "TEXCOORD_0"]`, `["targets", "2",
@@ -341,8 +399,9 @@ impl Editor<'_> {
             let picked = Elements { bytes: std::mem::take(&mut accessor.bytes), ..model.clone() };
             let (lo, hi) = picked.bounds(0..count);
             accessor.bytes = picked.bytes;
-            accessor.json.insert("min".into(), numbers(&lo));
-            accessor.json.insert("max".into(), numbers(&hi));
+            let float = model.data_type == gltf::accessor::DataType::F32;
+            accessor.json.insert("min".into(), numbers(&lo, float));
+            accessor.json.insert("max".into(), numbers(&hi, float));
         }
         Ok(accessor)
     }
@@ -606,12 +665,13 @@ fn same_type(a: &Elements, b: &Elements) -> bool {
     (a.data_type, a.normalized, a.dimensions) == (b.data_type, b.normalized, b.dimensions)
 }
 
-/// JSON numbers, integers where the value is one (glTF bounds of integer accessors).
-fn numbers(values: &[f64]) -> Value {
-    values
-        .iter()
-        .map(|&x| if x.fract() == 0.0 && x.abs() < 1e15 { json!(x as i64) } else { json!(x) })
-        .collect()
+/// JSON numbers: `f32`s written as `f32`s (shortest, as exporters write them) for a
+/// float accessor, integers for an integer one (glTF's bounds are in the components' type).
+fn numbers(values: &[f64], float: bool) -> Value {
+    // An `f32` goes through its shortest decimal form: JSON holds `f64`s, and 0.3f32 as
+    // an `f64` would be written 0.30000001192092896.
+    let shortest = |x: f64| (x as f32).to_string().parse::<f64>().unwrap_or(x);
+    values.iter().map(|&x| if float { json!(shortest(x)) } else { json!(x as i64) }).collect()
 }
 
 fn align(bin: &mut Vec<u8>) {

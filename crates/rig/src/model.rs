@@ -179,17 +179,20 @@ pub struct PrimitiveSpan {
 /// One glTF mesh of a rig, skinned by one glTF skin: where it lies in [`Rig::mesh`] and
 /// how its skin's joints map to the rig's one [`Skin`] (the skins of every mesh merged,
 /// a joint per node and inverse bind matrix).
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct MeshPart {
     /// The first node carrying it.
     pub node: usize,
     /// `meshes[mesh]` in the document.
     pub mesh: usize,
     pub name: String,
-    /// `skins[skin]` in the document.
-    pub skin: usize,
-    /// The rig joint of each joint of its skin.
+    /// `skins[skin]` in the document; `None` for a rigid mesh below a bone.
+    pub skin: Option<usize>,
+    /// The rig joint of each joint of its skin (a rigid mesh: the one joint it follows).
     pub joints: Vec<u16>,
+    /// A rigid mesh: the matrix that took its own positions into the skin's bind space
+    /// (those of [`Rig::mesh`]), which [`crate::edit`] undoes for moved vertices.
+    pub to_bind: Option<Mat4>,
     /// Its split vertices and triangles in [`Rig::mesh`].
     pub vertices: std::ops::Range<u32>,
     pub triangles: std::ops::Range<u32>,

@@ -10,7 +10,9 @@
 //! picks one by mesh or node name) with `POSITION`, `NORMAL`, `TEXCOORD_0` and every
 //! `JOINTS_n`/`WEIGHTS_n` set, their triangle primitives concatenated ([`MeshPart`] says
 //! where each mesh lies); their skins merged into one (a joint per node and inverse bind
-//! matrix, the first mesh's skin as it is); the animations' translation, rotation and
+//! matrix, the first mesh's skin as it is); without [`ReadOptions::mesh`], every mesh
+//! without a skin on a node below a joint too, rigidly skinned to that joint; the
+//! animations' translation, rotation and
 //! scale channels. Morph targets (sparse ones too) and every other attribute are checked
 //! (one element per vertex, layout) and carried into the output by [`crate::edit`]: each
 //! kept vertex keeps its deltas. Buffers come from the GLB binary chunk, base64 `data:`
@@ -147,7 +149,7 @@ impl Reader<'_> {
         for (node, gltf_mesh, gltf_skin) in &chosen {
             let own = self.read_skin(gltf_skin, &nodes)?;
             let joints = merge_skin(&mut skin, &own);
-            let mut part = self.read_mesh(gltf_mesh, &own, &mut weight_sums)?;
+            let mut part = self.read_mesh(gltf_mesh, Skinning::Skin(&own), &mut weight_sums)?;
             for j in &mut part.influences.joints {
                 *j = joints[usize::from(*j)];
             }
@@ -157,8 +159,9 @@ impl Reader<'_> {
                 node: *node,
                 mesh: gltf_mesh.index(),
                 name: mesh_name(gltf_mesh),
-                skin: gltf_skin.index(),
+                skin: Some(gltf_skin.index()),
                 joints,
+                to_bind: None,
                 vertices,
                 triangles,
             });
@@ -170,9 +173,90 @@ impl Reader<'_> {
         self.check_keyframe_total()?;
         let animations =
             self.document.animations().map(|a| self.read_animation(&a)).collect::<Result<_, _>>()?;
-        let rig = Rig { weight_sums, nodes, scenes, scene, mesh_node, meshes: parts, skin, animations, mesh };
+        let mut rig =
+            Rig { weight_sums, nodes, scenes, scene, mesh_node, meshes: parts, skin, animations, mesh };
         check_tree(&self.path, &rig)?;
+        if options.mesh.is_none() {
+            self.add_rigid_meshes(&mut rig)?;
+        }
         Ok(rig)
+    }
+
+    /// Adds every mesh of a node without a skin below a joint (a visor, a weapon) as
+    /// rigidly skinned to its nearest joint above, its vertices moved into the skin's bind
+    /// space (`MeshPart::to_bind`): in the bind pose the rig's joints are where its inverse
+    /// bind matrices put them, and in every pose the mesh follows that joint as the node
+    /// tree makes it. A mesh carried by a node not below a joint does not move with the
+    /// skeleton and passes through unchanged, as does one already read.
+    fn add_rigid_meshes(&self, rig: &mut Rig) -> Result<(), RigError> {
+        let parents = rig.parents();
+        let mut joint_of_node = std::collections::HashMap::new();
+        for (j, &n) in rig.skin.joints.iter().enumerate() {
+            joint_of_node.entry(n).or_insert(j);
+        }
+        let world = crate::pose::world_matrices(rig, &crate::pose::rest_locals(rig));
+        let mut seen: std::collections::BTreeSet<usize> = rig.meshes.iter().map(|m| m.mesh).collect();
+        let mut weight_sums = WeightSums::default();
+        for node in self.document.nodes() {
+            let Some(mesh) = node.mesh().filter(|_| node.skin().is_none()) else { continue };
+            let mut above = parents[node.index()];
+            while let Some(n) = above.filter(|n| !joint_of_node.contains_key(n)) {
+                above = parents[n];
+            }
+            let Some(anchor) = above else { continue };
+            if !seen.insert(mesh.index()) {
+                continue;
+            }
+            let joint = joint_of_node[&anchor];
+            // bind = B_j⁻¹ · W_anchor⁻¹ · W_node · local: where the joint's skinning
+            // matrix W_anchor · B_j takes it back to W_node · local in the rest pose.
+            let inverse = |m: desal_mesh::math::Mat4, what: &str| {
+                m.try_inverse().ok_or_else(|| RigError::Node {
+                    path: self.path.clone(),
+                    node: node.index(),
+                    label: crate::pose::node_label(rig, node.index()),
+                    reason: format!(
+                        "carries mesh '{}' below {what}, which is singular in the rest pose",
+                        mesh_name(&mesh)
+                    ),
+                })
+            };
+            let to_bind = inverse(rig.skin.inverse_bind_matrix(joint), "a joint whose inverse bind matrix")?
+                * inverse(world[anchor], &format!("joint node {anchor}"))?
+                * world[node.index()];
+            let mut part = self.read_mesh(&mesh, Skinning::Rigid(joint as u16), &mut weight_sums)?;
+            for p in &mut part.positions {
+                let q = crate::pose::transform_point(
+                    &to_bind,
+                    &desal_mesh::Vec3::new(p[0].into(), p[1].into(), p[2].into()),
+                );
+                *p = [q.x as f32, q.y as f32, q.z as f32];
+            }
+            if let Some(normals) = &mut part.normals {
+                let linear = to_bind.fixed_view::<3, 3>(0, 0).into_owned();
+                let normal_matrix = linear.try_inverse().map(|m| m.transpose()).unwrap_or(linear);
+                for n in normals.iter_mut() {
+                    let v = (normal_matrix * desal_mesh::Vec3::new(n[0].into(), n[1].into(), n[2].into()))
+                        .normalize();
+                    if v.iter().all(|x| x.is_finite()) {
+                        *n = [v.x as f32, v.y as f32, v.z as f32];
+                    }
+                }
+            }
+            let name = mesh_name(&mesh);
+            let (vertices, triangles) = append_mesh(&mut rig.mesh, part, false);
+            rig.meshes.push(MeshPart {
+                node: node.index(),
+                mesh: mesh.index(),
+                name,
+                skin: None,
+                joints: vec![joint as u16],
+                to_bind: Some(to_bind),
+                vertices,
+                triangles,
+            });
+        }
+        Ok(())
     }
 
     /// The skinned meshes to simplify, each with the first node that carries it and its
@@ -259,7 +343,7 @@ impl Reader<'_> {
     fn read_mesh(
         &self,
         mesh: &gltf::Mesh<'_>,
-        skin: &Skin,
+        skinning: Skinning<'_>,
         weight_sums: &mut WeightSums,
     ) -> Result<SkinnedMesh, RigError> {
         let name = mesh_name(mesh);
@@ -312,40 +396,61 @@ impl Reader<'_> {
                 }
                 _ => out.uvs = None,
             }
-            let mut joints: Vec<Vec<[u16; 4]>> = Vec::new();
-            let mut weights: Vec<Vec<[f32; 4]>> = Vec::new();
-            for set in 0.. {
-                match (
-                    primitive.get(&gltf::Semantic::Joints(set)),
-                    primitive.get(&gltf::Semantic::Weights(set)),
-                ) {
-                    (Some(j), Some(w)) => {
-                        let j = self.accessors.integers(&j, Semantic::Joints(set), &used_by)?;
-                        // JOINTS_n are u8 or u16 (checked), so every value fits.
-                        joints.push(
-                            j.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]].map(|x| x as u16)).collect(),
-                        );
-                        let w = floats(&w, Semantic::Weights(set))?;
-                        weights.push(w.chunks_exact(4).map(|c| c.try_into().expect("4 values")).collect());
+            match skinning {
+                Skinning::Rigid(joint) => {
+                    for _ in 0..count {
+                        out.influences.push_row([(joint, 1.0)]);
                     }
-                    (None, None) => break,
-                    _ => return Err(bad(&format!("JOINTS_{set} and WEIGHTS_{set} must come together"))),
                 }
-                if joints.last().map(Vec::len) != Some(count) || weights.last().map(Vec::len) != Some(count) {
-                    return Err(bad(&format!("JOINTS_{set}/WEIGHTS_{set} do not have one entry per vertex")));
+                Skinning::Skin(skin) => {
+                    let mut joints: Vec<Vec<[u16; 4]>> = Vec::new();
+                    let mut weights: Vec<Vec<[f32; 4]>> = Vec::new();
+                    for set in 0.. {
+                        match (
+                            primitive.get(&gltf::Semantic::Joints(set)),
+                            primitive.get(&gltf::Semantic::Weights(set)),
+                        ) {
+                            (Some(j), Some(w)) => {
+                                let j = self.accessors.integers(&j, Semantic::Joints(set), &used_by)?;
+                                // JOINTS_n are u8 or u16 (checked), so every value fits.
+                                joints.push(
+                                    j.chunks_exact(4)
+                                        .map(|c| [c[0], c[1], c[2], c[3]].map(|x| x as u16))
+                                        .collect(),
+                                );
+                                let w = floats(&w, Semantic::Weights(set))?;
+                                weights.push(
+                                    w.chunks_exact(4).map(|c| c.try_into().expect("4 values")).collect(),
+                                );
+                            }
+                            (None, None) => break,
+                            _ => {
+                                return Err(bad(&format!(
+                                    "JOINTS_{set} and WEIGHTS_{set} must come together"
+                                )));
+                            }
+                        }
+                        if joints.last().map(Vec::len) != Some(count)
+                            || weights.last().map(Vec::len) != Some(count)
+                        {
+                            return Err(bad(&format!(
+                                "JOINTS_{set}/WEIGHTS_{set} do not have one entry per vertex"
+                            )));
+                        }
+                    }
+                    if joints.is_empty() {
+                        return Err(bad("has no JOINTS_0/WEIGHTS_0: the mesh is not skinned"));
+                    }
+                    weight_sums.add(self.read_influences(
+                        &joints,
+                        &weights,
+                        base,
+                        &name,
+                        skin,
+                        &mut out.influences,
+                    )?);
                 }
             }
-            if joints.is_empty() {
-                return Err(bad("has no JOINTS_0/WEIGHTS_0: the mesh is not skinned"));
-            }
-            weight_sums.add(self.read_influences(
-                &joints,
-                &weights,
-                base,
-                &name,
-                skin,
-                &mut out.influences,
-            )?);
             let indices: Vec<u32> = match primitive.indices() {
                 Some(i) => self.accessors.integers(&i, Semantic::Indices, &used_by)?,
                 None => (0..count as u32).collect(),
@@ -674,6 +779,15 @@ fn check_tree(path: &Path, rig: &Rig) -> Result<(), RigError> {
         }
     }
     Ok(())
+}
+
+/// How a mesh's vertices follow the skeleton.
+#[derive(Clone, Copy)]
+enum Skinning<'s> {
+    /// By its skin's `JOINTS_n`/`WEIGHTS_n`.
+    Skin(&'s Skin),
+    /// Rigidly with this joint of the rig (a mesh below a bone, with no skin).
+    Rigid(u16),
 }
 
 /// Merges `own` (a skin of one mesh) into the rig's one skin, which `own` starts when

@@ -897,13 +897,18 @@ fn issue_42_the_simplified_document_changes_only_the_simplified_primitive() {
             assert_eq!(after[&key], before[&key], "{key}");
         }
     }
-    // Meshes: equal but for the simplified primitive's accessor numbers.
+    // Meshes: equal but for the simplified primitives' accessor numbers (the limb's and
+    // the rigid visor's).
     let strip = |j: &serde_json::Value| {
         let mut meshes = j["meshes"].clone();
         let primitive = meshes[0]["primitives"][0].as_object_mut().unwrap();
         let names = keys(&primitive["attributes"]);
         primitive.remove("attributes");
         primitive.remove("indices");
+        let visor = meshes[1]["primitives"][0].as_object_mut().unwrap();
+        assert_eq!(keys(&visor["attributes"]), ["POSITION"], "the rigid visor stays rigid");
+        visor.remove("attributes");
+        visor.remove("indices");
         (meshes, names)
     };
     let (after_meshes, after_names) = strip(&after);
@@ -911,11 +916,12 @@ fn issue_42_the_simplified_document_changes_only_the_simplified_primitive() {
     assert_eq!(after_meshes, before_meshes);
     before_names.retain(|n| !n.ends_with("_1"));
     assert_eq!(after_names, before_names, "one influence set is enough");
-    // No accessor moved: the two slots JOINTS_1 and WEIGHTS_1 freed hold one zero each.
+    // No accessor moved: of the two slots JOINTS_1 and WEIGHTS_1 freed, the visor's new
+    // indices (it had none) take one, and the other holds one zero.
     assert_eq!(after["accessors"].as_array().unwrap().len(), before["accessors"].as_array().unwrap().len());
     let leftovers: Vec<&serde_json::Value> =
         after["accessors"].as_array().unwrap().iter().filter(|a| a["count"] == 1).collect();
-    assert_eq!(leftovers.len(), 2, "{leftovers:?}");
+    assert_eq!(leftovers.len(), 1, "{leftovers:?}");
     for a in leftovers {
         assert_eq!(view_bytes(&after, &after_bin, &a["bufferView"]), [0; 4]);
     }
@@ -927,13 +933,12 @@ fn issue_42_the_simplified_document_changes_only_the_simplified_primitive() {
         edited.images,
         [desal_rig::ExternalImage { path: "tex/skin.png".into(), bytes: EXTERNAL_IMAGE.to_vec() }]
     );
-    // Every accessor a skin, an animation or the visor names is where it was, on the same
-    // view, holding the same values.
+    // Every accessor a skin or an animation names is where it was, on the same view,
+    // holding the same values.
     let named = [
         before["skins"][0]["inverseBindMatrices"].clone(),
         before["animations"][0]["samplers"][0]["input"].clone(),
         before["animations"][0]["samplers"][0]["output"].clone(),
-        before["meshes"][1]["primitives"][0]["attributes"]["POSITION"].clone(),
     ];
     for a in named {
         let i = a.as_u64().unwrap() as usize;
@@ -946,6 +951,35 @@ fn issue_42_the_simplified_document_changes_only_the_simplified_primitive() {
         );
     }
     assert_eq!(after["buffers"], serde_json::json!([{"byteLength": after_bin.len()}]));
+    // The visor, a mesh without a skin on the lower joint's node, is read as rigidly
+    // skinned to that joint, its vertices in the bind space (its node 0.5 above the joint,
+    // the joint 1 above the origin where its inverse bind matrix puts it), and written
+    // back in its own space: its three vertices kept, their positions exactly the input's.
+    let visor = &rig.meshes[1];
+    assert_eq!((visor.name.as_str(), visor.skin, visor.joints.as_slice()), ("visor", None, &[1u16][..]));
+    assert_eq!(rig.mesh.positions[visor.vertices.start as usize], [0.0, 1.5 + 1.5, 0.3]);
+    assert!(rig.mesh.influences.of(visor.vertices.start as usize).eq([(1, 1.0)]));
+    // Posed by skinning, it lands where the node tree carries it: the lower joint bent
+    // 90° about z takes the visor's first vertex (0, 1.5, 0.3) in its own space to
+    // (-2, 1, 0.3).
+    let locals = animated_locals(&rig, &rig.animations[0], 1.0);
+    let world = desal_rig::pose::world_matrices(&rig, &locals);
+    let bind: Vec<Vec3> =
+        rig.mesh.positions.iter().map(|p| Vec3::new(p[0].into(), p[1].into(), p[2].into())).collect();
+    let skinned = skin_points(&bind, &rig.mesh.influences, &joint_matrices(&rig, &locals));
+    let carried =
+        desal_rig::pose::transform_point(&world[visor.node], &Vec3::new(0.0, 1.5, f64::from(0.3_f32)));
+    let first = skinned[visor.vertices.start as usize];
+    assert!(
+        (first - carried).norm() < 1e-6 && (first - Vec3::new(-2.0, 1.0, 0.3)).norm() < 1e-6,
+        "{first:?}"
+    );
+    let position = |j: &serde_json::Value, bin: &[u8]| {
+        let a = &j["accessors"]
+            [j["meshes"][1]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap() as usize];
+        (a["min"].clone(), a["max"].clone(), view_bytes(j, bin, &a["bufferView"]).to_vec())
+    };
+    assert_eq!(position(&after, &after_bin), position(&before, &before_bin));
     // The simplified primitive reads back as the simplified mesh, and its COLOR_0 (3-byte
     // elements, strided to 4) holds each vertex's source colour.
     let back =
@@ -956,7 +990,9 @@ fn issue_42_the_simplified_document_changes_only_the_simplified_primitive() {
     assert_eq!((colour["componentType"].as_u64(), colour["normalized"].as_bool()), (Some(5121), Some(true)));
     let colours = view_bytes(&after, &after_bin, &colour["bufferView"]);
     assert_eq!(after["bufferViews"][colour["bufferView"].as_u64().unwrap() as usize]["byteStride"], 4);
-    for (v, &source) in out.mesh.sources.iter().enumerate() {
+    let limb = out.mesh.primitives[0].vertices.clone();
+    assert_eq!(colour["count"], limb.len());
+    for (v, &source) in out.mesh.sources[limb.start as usize..limb.end as usize].iter().enumerate() {
         let s = source as usize;
         assert_eq!(colours[4 * v..4 * v + 3], [s as u8, (3 * s) as u8, 7], "vertex {v}");
     }
