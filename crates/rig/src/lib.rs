@@ -66,8 +66,10 @@ pub use weld::Weld;
 pub use write::write_glb;
 
 /// Version of what this crate makes of a rig (weld, frames, LBS, labels, output); bump
-/// when the output for the same file and settings changes.
-pub const VERSION: u32 = 1;
+/// when the output for the same file and settings changes. 2: every skinned mesh and every
+/// mesh below a bone is read (issue 42), so a file with a mesh below a bone gives another
+/// pose set than before.
+pub const VERSION: u32 = 2;
 
 /// Name of the template pose: the mesh as bound (every skinning matrix the identity).
 pub const BIND_POSE: &str = "bind";
