@@ -257,8 +257,9 @@ pub fn map(args: &MapArgs) -> Result<()> {
             crate::outputs::DatasetOutputs { artifacts: Vec::new(), files }.write_into(tmp)
         })?;
     }
-    if let Some((path, (bytes, summary))) = &glb {
-        desal_io::write_atomic(path, bytes)?;
+    if let Some((path, (edited, summary))) = &glb {
+        desal_io::write_atomic(path, &edited.bytes)?;
+        stages::rig::write_images_beside(path, &edited.images)?;
         eprintln!(
             "wrote {}: {} vertices, {} faces, weights {}",
             path.display(),

@@ -181,6 +181,8 @@ fn simplify_with_seams(
 pub struct RigSimplification {
     /// The simplified rig (`.glb`), the bytes `desal run` writes as `simplified.glb`.
     pub glb: Vec<u8>,
+    /// The images it names by a relative URI, to be written beside it.
+    pub images: Vec<desal_rig::ExternalImage>,
     pub rig: SimplifiedRigSummary,
     pub ingest: StageOutput<PoseSetV2, IngestSummary>,
     pub labels: StageOutput<LabelsV1, LabelsSummary>,
@@ -208,9 +210,9 @@ pub fn simplify_rig(
         None
     };
     let stages = simplify_with_seams(params, &set, &part_labels, seams.as_ref(), progress)?;
-    let (glb, summary) =
+    let (edited, summary) =
         crate::stages::rig::simplified_glb(&input.to_owned(), &stages.simplified.body, &stages.map.body)?;
-    Ok(RigSimplification { glb, rig: summary, ingest, labels, stages })
+    Ok(RigSimplification { glb: edited.bytes, images: edited.images, rig: summary, ingest, labels, stages })
 }
 
 /// The simplified pose set and its labels: `map` applied to every pose of `set`.

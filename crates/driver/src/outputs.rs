@@ -12,7 +12,7 @@
 //! | `simplified/<pose>.ply`, `simplified/parts.txt`, `vertex_map.txt` | the registered simplified pose set |
 //! | `hierarchy-<k>.dsa`, `hierarchy.npz`, `hierarchy.json` | with `[dataset.hierarchy]`: each level's cache entry, the npz of every level (`stages::hierarchy::npz_arrays`), the levels' summaries |
 //! | `hierarchy.png`, `upsampling-error.png`, `upsampling-error-<k>.ply` | with `[dataset.hierarchy]`: the levels side by side; the held-out per-vertex upsampling error of each level, fitted against barycentric (RMS, drawn and as PLY properties) |
-//! | `simplified.glb`, `simplified-rig.json` | with `[dataset.rig]`: the simplified rig (`stages::rig::simplified_glb`) and its figures |
+//! | `simplified.glb` (`.vrm` for a `.vrm`), `simplified-rig.json`, the images it names by URI | with `[dataset.rig]`: the simplified rig, the input document edited (`stages::rig::simplified_glb`), its figures, and its external images under their relative paths |
 //! | `model.npz`, `model.json` | with `[dataset.model]`: the simplified model in the input's keys and dtypes (an npz also for a `.pkl` input), its joint regressor solved on the kept vertices (`stages::model::simplified_model`), and what the solve and the landmarks did |
 //! | `view.html` | with `[dataset.rig]`: both rigs side by side in three.js, loaded from its pinned CDN URLs, or inlined from the package `DESAL_THREE` names (`viewer.rs`) |
 //! | `report.json` | the run's report, with `outputs_key` |
@@ -33,7 +33,9 @@ use crate::stages::{Counts, DatasetStages};
 /// an older desal is rewritten, not kept as in place. Bump it whenever a writer here
 /// adds, drops or changes a file. 2: the hierarchy figures and the rig viewer. 3: the
 /// viewer's three.js from its CDN or `DESAL_THREE`, no `viewer/three/` copy. 4: a model
-/// dataset's `model.npz` and `model.json`.
+/// dataset's `model.npz` and `model.json`; the simplified rig is the input document
+/// edited (every mesh, material, texture and extension kept; `simplified.vrm` for a
+/// `.vrm`), its external images beside it.
 pub const OUTPUTS_VERSION: u32 = 4;
 
 /// `desal eval`'s folder inside a dataset's output folder: kept when `desal run` replaces
@@ -174,18 +176,48 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
     if let Some(rig) = &stages.rig {
         // Built before anything is written: a rig that cannot be written fails the run
         // with the output folder untouched.
-        let (bytes, summary) = crate::stages::rig::simplified_glb(rig, stages.simplified.body()?, map)?;
-        for (name, page) in crate::viewer::view_files(rig, &bytes, &summary)? {
+        let (edited, summary) = crate::stages::rig::simplified_glb(rig, stages.simplified.body()?, map)?;
+        for (name, page) in crate::viewer::view_files(rig, &edited.bytes, &summary)? {
             outputs.files.push((name, Box::new(move |p| Ok(desal_io::write_atomic(p, &page)?))));
         }
-        outputs
-            .files
-            .push(("simplified.glb".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, &bytes)?))));
+        let bytes = edited.bytes;
+        let name = crate::stages::rig::simplified_file_name(rig);
+        outputs.files.push((name.into(), Box::new(move |p| Ok(desal_io::write_atomic(p, &bytes)?))));
         outputs
             .files
             .push(("simplified-rig.json".into(), Box::new(move |p| Ok(desal_io::write_json(p, &summary)?))));
+        add_rig_images(&mut outputs, &rig.file, edited.images)?;
     }
     Ok(outputs)
+}
+
+/// The images the simplified rig names by URI, under the same relative paths as beside
+/// the input; one that would go into a file or folder desal writes itself is refused (an
+/// image named twice is written once).
+fn add_rig_images(
+    outputs: &mut DatasetOutputs,
+    rig: &Path,
+    images: Vec<desal_rig::ExternalImage>,
+) -> Result<()> {
+    let top = |name: &str| name.split('/').next().unwrap_or(name).to_owned();
+    let mut ours: Vec<String> = outputs.names().iter().map(|n| top(n)).collect();
+    ours.extend(["report.json".to_owned(), KEPT_SUBFOLDER.to_owned()]);
+    let mut written = std::collections::BTreeSet::new();
+    for image in images {
+        let relative = image.path.to_string_lossy().replace('\\', "/");
+        if let Some(other) = ours.iter().find(|&o| *o == top(&relative)) {
+            bail!(
+                "{}: image '{relative}' would be written beside the simplified rig as {relative}, in desal's \
+                 own {other}; move the image into another folder (e.g. textures/)",
+                rig.display()
+            );
+        }
+        if written.insert(relative.clone()) {
+            let bytes = image.bytes;
+            outputs.files.push((relative, Box::new(move |p| Ok(desal_io::write_atomic(p, &bytes)?))));
+        }
+    }
+    Ok(())
 }
 
 /// `hierarchy-<k>.dsa` per level, `hierarchy.npz`, `hierarchy.json`, and the figures:

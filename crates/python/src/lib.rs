@@ -726,6 +726,7 @@ fn simplify_rig<'py>(
         let s = detached(py, progress, |p| {
             let s = memory::simplify_rig(&file, &rig, &params, p).map_err(errors::classify)?;
             desal_io::write_atomic(&out, &s.glb).map_err(errors::io)?;
+            desal_driver::stages::rig::write_images_beside(&out, &s.images).map_err(errors::classify)?;
             Ok(s)
         })?;
         let report = PyDict::new(py);

@@ -47,7 +47,7 @@ def test_simplify_rig_writes_the_cli_bytes(cli, tmp_path):
     report = desal.simplify_rig(RIG, out, **SETTINGS)
     assert out.read_bytes() == cli
     assert report["rig"]["simplified_vertices"] == 2676
-    assert report["rig"]["weights"] == "exact (subset placement)"
+    assert report["rig"]["weights"].startswith("exact, capped at max_influences"), "4 by default"
     assert report["ingest"]["poses"] == 8, "the bind pose and 7 frames"
     assert report["glb"] == out
 
@@ -72,13 +72,15 @@ def test_bad_rig_input_is_an_input_error_naming_it(tmp_path):
 
 
 def test_max_influences_caps_subset_weights(tmp_path):
-    """The sample has up to 7 influences per vertex; max_influences=4 keeps 4, as the
-    summary and the written file both say."""
+    """The sample has up to 7 influences per vertex; max_influences=4 (the default) keeps
+    4, as the summary and the written file both say; "all" keeps them all."""
     out = tmp_path / "four.glb"
     report = desal.simplify_rig(RIG, out, **SETTINGS, max_influences=4)
     assert report["rig"]["max_influences"] == 4
     assert report["rig"]["weights"].startswith("exact, capped")
-    exact = desal.simplify_rig(RIG, tmp_path / "exact.glb", **SETTINGS)
+    default = desal.simplify_rig(RIG, tmp_path / "default.glb", **SETTINGS)
+    assert default["rig"]["max_influences"] == 4, "engines skin 4 (issue 42, item 5)"
+    exact = desal.simplify_rig(RIG, tmp_path / "exact.glb", **SETTINGS, max_influences="all")
     assert exact["rig"]["max_influences"] > 4
     with pytest.raises(desal.InputError, match="max_influences"):
         desal.simplify_rig(RIG, tmp_path / "zero.glb", **SETTINGS, max_influences=0)

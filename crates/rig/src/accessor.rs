@@ -44,8 +44,13 @@ pub enum Semantic {
     Translation,
     Rotation,
     Scale,
-    /// Morph target weights (checked, not read: morph targets are refused).
+    /// Morph target weights (checked, not read: desal carries them unchanged).
     MorphWeights,
+    /// An attribute or morph target delta desal does not interpret but carries, element by
+    /// element, into a simplified primitive (`TEXCOORD_n`, `COLOR_n`, `TANGENT`,
+    /// application attributes, target deltas): any type, checked for layout only, since
+    /// its bytes are copied as they are.
+    Carried,
 }
 
 impl fmt::Display for Semantic {
@@ -63,6 +68,7 @@ impl fmt::Display for Semantic {
             Semantic::Rotation => write!(f, "rotation keyframes"),
             Semantic::Scale => write!(f, "scale keyframes"),
             Semantic::MorphWeights => write!(f, "morph weight keyframes"),
+            Semantic::Carried => write!(f, "carried attribute"),
         }
     }
 }
@@ -126,6 +132,7 @@ fn allowed(semantic: Semantic, quantized: bool) -> (Dimensions, &'static [Compon
         Semantic::Translation | Semantic::Scale => (Dimensions::Vec3, FLOAT),
         Semantic::Rotation => (Dimensions::Vec4, FLOAT_OR_NORMALIZED),
         Semantic::MorphWeights => (Dimensions::Scalar, FLOAT_OR_NORMALIZED),
+        Semantic::Carried => unreachable!("carried accessors take any type"),
     }
 }
 
@@ -210,6 +217,54 @@ impl Accessors<'_> {
         self.read(accessor, semantic, used_by).map(drop)
     }
 
+    /// The accessor's elements as stored (any type, for [`Semantic::Carried`] and the
+    /// attributes desal copies bit for bit), sparse values applied.
+    pub fn elements(
+        &self,
+        accessor: &gltf::Accessor<'_>,
+        semantic: Semantic,
+        used_by: &str,
+    ) -> Result<Elements, RigError> {
+        let raw = self.read(accessor, semantic, used_by)?;
+        let dimensions = accessor.dimensions();
+        Ok(Elements {
+            data_type: raw.data_type,
+            normalized: raw.normalized,
+            dimensions,
+            size: dimensions.multiplicity() * raw.data_type.size(),
+            bytes: raw.components,
+        })
+    }
+
+    /// The accessor's type against the specification's table for `semantic`: its
+    /// dimensions, or why it does not fit.
+    fn check_type(&self, accessor: &gltf::Accessor<'_>, semantic: Semantic) -> Result<Dimensions, String> {
+        let (dimensions, components) = allowed(semantic, self.quantized);
+        let (data_type, normalized) = (accessor.data_type(), accessor.normalized());
+        if accessor.dimensions() != dimensions {
+            return Err(format!(
+                "has type {}; glTF requires {}",
+                type_name(accessor.dimensions()),
+                type_name(dimensions)
+            ));
+        }
+        let fits =
+            |&(t, n): &Component| t == data_type && (n == Norm::Either || (n == Norm::Yes) == normalized);
+        if !components.iter().any(fits) {
+            let given = component_name(data_type, normalized);
+            let wanted: Vec<String> = components.iter().map(|&(t, n)| allowed_name(t, n)).collect();
+            let hint = if self.quantized
+                || !matches!(semantic, Semantic::Position | Semantic::Normal | Semantic::TexCoord(_))
+            {
+                ""
+            } else {
+                " (quantised attributes need KHR_mesh_quantization in extensionsUsed)"
+            };
+            return Err(format!("has component type {given}; glTF allows {}{hint}", wanted.join(", ")));
+        }
+        Ok(dimensions)
+    }
+
     /// The checked accessor's components: its view's elements (or zeros), then its
     /// sparse values written over them.
     fn read(
@@ -225,29 +280,12 @@ impl Accessors<'_> {
             used_by: used_by.to_owned(),
             reason,
         };
-        let (dimensions, components) = allowed(semantic, self.quantized);
         let (data_type, normalized) = (accessor.data_type(), accessor.normalized());
-        if accessor.dimensions() != dimensions {
-            return Err(bad(format!(
-                "has type {}; glTF requires {}",
-                type_name(accessor.dimensions()),
-                type_name(dimensions)
-            )));
-        }
-        let fits =
-            |&(t, n): &Component| t == data_type && (n == Norm::Either || (n == Norm::Yes) == normalized);
-        if !components.iter().any(fits) {
-            let given = component_name(data_type, normalized);
-            let wanted: Vec<String> = components.iter().map(|&(t, n)| allowed_name(t, n)).collect();
-            let hint = if self.quantized
-                || !matches!(semantic, Semantic::Position | Semantic::Normal | Semantic::TexCoord(_))
-            {
-                ""
-            } else {
-                " (quantised attributes need KHR_mesh_quantization in extensionsUsed)"
-            };
-            return Err(bad(format!("has component type {given}; glTF allows {}{hint}", wanted.join(", "))));
-        }
+        let dimensions = if semantic == Semantic::Carried {
+            accessor.dimensions()
+        } else {
+            self.check_type(accessor, semantic).map_err(bad)?
+        };
         let width = dimensions.multiplicity();
         let size = data_type.size();
         let element = width * size;
@@ -357,6 +395,68 @@ impl Accessors<'_> {
             ));
         };
         Ok(Span { data: bytes, stride })
+    }
+}
+
+/// An accessor's elements as stored, tightly packed: element `e` is
+/// `bytes[e · size..(e + 1) · size]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Elements {
+    pub data_type: DataType,
+    pub normalized: bool,
+    pub dimensions: Dimensions,
+    /// Bytes per element.
+    pub size: usize,
+    pub bytes: Vec<u8>,
+}
+
+impl Elements {
+    /// The glTF `type` string (`"VEC3"`).
+    pub fn type_name(&self) -> &'static str {
+        type_name(self.dimensions)
+    }
+
+    /// The glTF `componentType` code.
+    pub fn component_code(&self) -> u32 {
+        component_code(self.data_type)
+    }
+
+    /// Per-component minimum and maximum over elements `picked` (each in range), in the
+    /// components' own units, as glTF's `min` and `max` are (integers stay integers).
+    pub fn bounds(&self, picked: impl IntoIterator<Item = usize>) -> (Vec<f64>, Vec<f64>) {
+        let width = self.dimensions.multiplicity();
+        let component = self.data_type.size();
+        let mut lo = vec![f64::INFINITY; width];
+        let mut hi = vec![f64::NEG_INFINITY; width];
+        for e in picked {
+            for c in 0..width {
+                let at = e * self.size + c * component;
+                let b = &self.bytes[at..at + component];
+                let x = match self.data_type {
+                    DataType::F32 => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+                    DataType::I8 => f64::from(b[0] as i8),
+                    DataType::U8 => f64::from(b[0]),
+                    DataType::I16 => f64::from(i16::from_le_bytes([b[0], b[1]])),
+                    DataType::U16 => f64::from(u16::from_le_bytes([b[0], b[1]])),
+                    DataType::U32 => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+                };
+                lo[c] = lo[c].min(x);
+                hi[c] = hi[c].max(x);
+            }
+        }
+        (lo, hi)
+    }
+}
+
+/// The glTF `componentType` code of `data_type`.
+pub fn component_code(data_type: DataType) -> u32 {
+    match data_type {
+        DataType::I8 => 5120,
+        DataType::U8 => 5121,
+        DataType::I16 => 5122,
+        DataType::U16 => 5123,
+        DataType::U32 => 5125,
+        DataType::F32 => 5126,
     }
 }
 

@@ -42,6 +42,9 @@ pub struct Parsed {
     pub blob: Option<Vec<u8>>,
     /// The names in `extensionsUsed` and `extensionsRequired`.
     pub extensions: Vec<String>,
+    /// The JSON as the file holds it, before anything above was dropped for the crate:
+    /// what [`crate::edit`] writes back.
+    pub original: Value,
 }
 
 /// Parses `bytes` (GLB or JSON glTF); `path` names the file in errors.
@@ -66,6 +69,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, RigError> {
     if let Some(extension) = extensions.iter().find(|e| COMPRESSION_EXTENSIONS.contains(&e.as_str())) {
         return Err(RigError::Compressed { path: path.to_owned(), extension: extension.clone() });
     }
+    let original = value.clone();
     drop_non_object_extras(&mut value);
     drop_application_attributes(&mut value);
     crate::structure::check(path, &value)?;
@@ -75,7 +79,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, RigError> {
     let root: gltf::json::Root =
         serde_json::from_value(value).map_err(|e| gltf_error(gltf::Error::Deserialize(e)))?;
     let document = gltf::Document::from_json(root).map_err(gltf_error)?;
-    Ok(Parsed { document, blob, extensions })
+    Ok(Parsed { document, blob, extensions, original })
 }
 
 /// The extension names the file declares (`extensionsUsed` and `extensionsRequired`).

@@ -32,16 +32,10 @@ pub enum RigError {
     Buffer { path: PathBuf, buffer: usize, reason: String },
     #[error("{path}: no skinned mesh (no node has both a mesh and a skin); desal needs a rigged body")]
     NoSkin { path: PathBuf },
-    #[error("{path}: {count} skinned meshes ({names}); name one with `mesh = \"...\"` in [dataset.rig]")]
-    SeveralSkinnedMeshes { path: PathBuf, count: usize, names: String },
     #[error("{path}: no skinned mesh or node is called '{wanted}'; the skinned meshes are: {names}")]
     NoSuchMesh { path: PathBuf, wanted: String, names: String },
     #[error("{path}: mesh '{mesh}' primitive {primitive}: {reason}")]
     Primitive { path: PathBuf, mesh: String, primitive: usize, reason: String },
-    #[error(
-        "{path}: mesh '{mesh}' primitive {primitive} has {targets} morph target(s); rigs with morph targets are not supported yet: remove them (e.g. bake or delete the shape keys) and export again"
-    )]
-    MorphTargets { path: PathBuf, mesh: String, primitive: usize, targets: usize },
     #[error(
         "{path}: mesh '{mesh}' vertex {vertex}: every skinning weight is zero (JOINTS_n/WEIGHTS_n), so no joint moves it; weight it in the exporter"
     )]

@@ -5,7 +5,7 @@
 //! rig into what desal's stages run on — a registered pose set and part labels — and
 //! turns the simplified mesh back into a rig that an engine loads:
 //!
-//! 1. [`read_rig`]: the node tree, the one skinned mesh (with UVs and normals), its skin
+//! 1. [`read_rig`]: the node tree, every skinned mesh as one (with UVs and normals), their skins
 //!    and the animations; the JSON parsed and validated by the `gltf` crate, every
 //!    accessor checked against the glTF 2.0 specification and read by desal; bad or
 //!    hostile input refused with the file and the element ([`RigError`]).
@@ -15,9 +15,10 @@
 //!    pose is the template (pose 0). Their size is capped ([`MAX_FRAMES`],
 //!    [`MAX_POSE_NODES`], [`MAX_POSE_VERTICES`]) before anything is allocated.
 //! 4. [`dominant_joint_parts`]: labels from each vertex's heaviest joint.
-//! 5. [`simplified_rig`] then [`write_glb`]: the same skeleton, inverse bind matrices and
-//!    animations with the simplified mesh, seams kept, weights exact (subset placement)
-//!    or refitted (optimal placement).
+//! 5. [`simplified_rig`] then [`write_edited`]: the input document with the simplified
+//!    primitives in place of its own — every other mesh, material, texture, animation and
+//!    extension as it was —, seams kept, weights exact (subset placement) or refitted
+//!    (optimal placement). [`write_glb`] writes a rig built in memory.
 //! 6. [`viewer::view_html`]: a three.js page showing both rigs animated, loading the
 //!    pinned three.js from its CDN, or inlining a local copy for offline use.
 //!
@@ -27,6 +28,7 @@
 
 mod accessor;
 mod document;
+pub mod edit;
 pub mod error;
 pub mod model;
 pub mod parts;
@@ -43,16 +45,18 @@ pub mod write;
 use desal_mesh::math::Mat4;
 use desal_mesh::{PoseSet, Vec3};
 
+pub use edit::{EditedGlb, ExternalImage, SourceDocument, write_edited};
 pub use error::RigError;
 pub use model::{
-    Animation, Channel, Influences, Interpolation, LocalTransform, Node, Rig, Skin, SkinnedMesh,
+    Animation, Channel, Influences, Interpolation, LocalTransform, Node, PrimitiveSpan, Rig, Skin,
+    SkinnedMesh,
 };
 pub use parts::{PartsConfig, dominant_joint_parts};
 pub use pose::{
     Frame, FrameConfig, MAX_FRAMES, MAX_POSE_NODES, MAX_POSE_VERTICES, PoseSource, joint_matrices,
     sample_frames, skin_points,
 };
-pub use read::{ReadOptions, read_rig, read_rig_from};
+pub use read::{ReadOptions, read_rig, read_rig_and_document, read_rig_from};
 pub use seams::seam_edges;
 pub use simplified::{
     PoseTargets, SimplifiedInput, SimplifiedReport, WeightOptions, simplified_influences, simplified_rig,
@@ -62,8 +66,10 @@ pub use weld::Weld;
 pub use write::write_glb;
 
 /// Version of what this crate makes of a rig (weld, frames, LBS, labels, output); bump
-/// when the output for the same file and settings changes.
-pub const VERSION: u32 = 1;
+/// when the output for the same file and settings changes. 2: every skinned mesh and every
+/// mesh below a bone is read (issue 42), so a file with a mesh below a bone gives another
+/// pose set than before.
+pub const VERSION: u32 = 2;
 
 /// Name of the template pose: the mesh as bound (every skinning matrix the identity).
 pub const BIND_POSE: &str = "bind";

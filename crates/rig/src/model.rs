@@ -160,6 +160,44 @@ impl Influences {
     }
 }
 
+/// One primitive of the glTF document as a run of the skinned mesh's split vertices and
+/// triangles: the reader appends primitives in order, and the simplified mesh keeps one
+/// run per primitive, so [`crate::edit`] writes each back in place (its material, mode
+/// and extensions untouched).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PrimitiveSpan {
+    /// The glTF mesh (`meshes[mesh]`).
+    pub mesh: usize,
+    /// The primitive within it (`meshes[mesh].primitives[primitive]`).
+    pub primitive: usize,
+    /// Its split vertices.
+    pub vertices: std::ops::Range<u32>,
+    /// Its triangles.
+    pub triangles: std::ops::Range<u32>,
+}
+
+/// One glTF mesh of a rig, skinned by one glTF skin: where it lies in [`Rig::mesh`] and
+/// how its skin's joints map to the rig's one [`Skin`] (the skins of every mesh merged,
+/// a joint per node and inverse bind matrix).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshPart {
+    /// The first node carrying it.
+    pub node: usize,
+    /// `meshes[mesh]` in the document.
+    pub mesh: usize,
+    pub name: String,
+    /// `skins[skin]` in the document; `None` for a rigid mesh below a bone.
+    pub skin: Option<usize>,
+    /// The rig joint of each joint of its skin (a rigid mesh: the one joint it follows).
+    pub joints: Vec<u16>,
+    /// A rigid mesh: the matrix that took its own positions into the skin's bind space
+    /// (those of [`Rig::mesh`]), which [`crate::edit`] undoes for moved vertices.
+    pub to_bind: Option<Mat4>,
+    /// Its split vertices and triangles in [`Rig::mesh`].
+    pub vertices: std::ops::Range<u32>,
+    pub triangles: std::ops::Range<u32>,
+}
+
 /// The skinned mesh: one triangle list over split vertices, with their attributes.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkinnedMesh {
@@ -171,15 +209,30 @@ pub struct SkinnedMesh {
     pub uvs: Option<Vec<[f32; 2]>>,
     pub influences: Influences,
     pub triangles: Vec<[u32; 3]>,
+    /// The glTF primitives the vertices and triangles come from, in order, covering both
+    /// (empty for a mesh built in memory, which [`crate::write_glb`] writes as one
+    /// primitive).
+    pub primitives: Vec<PrimitiveSpan>,
+    /// For a simplified mesh, the input split vertex each vertex copies its other
+    /// attributes (`TEXCOORD_n`, `COLOR_n`, `TANGENT`, ...) and morph target deltas from;
+    /// empty for a mesh as read.
+    pub sources: Vec<u32>,
 }
 
 impl SkinnedMesh {
     pub fn vertex_count(&self) -> usize {
         self.positions.len()
     }
+
+    /// The index in [`SkinnedMesh::primitives`] of the span holding split vertex `v`.
+    pub fn primitive_of(&self, v: u32) -> Option<usize> {
+        let p = self.primitives.partition_point(|span| span.vertices.end <= v);
+        (p < self.primitives.len() && self.primitives[p].vertices.contains(&v)).then_some(p)
+    }
 }
 
-/// A skinned rig: the scene graph, the skin, the animations and the one skinned mesh.
+/// A skinned rig: the scene graph, the skin, the animations and the skinned meshes, as
+/// one mesh ([`Rig::mesh`], each glTF mesh a run of it: [`Rig::meshes`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rig {
     /// What reading did to the skinning weights (renormalised sums).
@@ -189,8 +242,11 @@ pub struct Rig {
     pub scenes: Vec<Vec<usize>>,
     /// The scene shown by default.
     pub scene: Option<usize>,
-    /// The node that carries the skinned mesh.
+    /// The node that carries the (first) skinned mesh.
     pub mesh_node: usize,
+    /// The glTF meshes [`Rig::mesh`] holds, in node order, each a run of its vertices and
+    /// triangles (empty for a rig built in memory: one mesh on [`Rig::mesh_node`]).
+    pub meshes: Vec<MeshPart>,
     pub skin: Skin,
     pub animations: Vec<Animation>,
     pub mesh: SkinnedMesh,

@@ -5,18 +5,25 @@
 //! checked against the specification's table and its buffer before it is read, so a
 //! hostile file is refused by name and never panics, allocates at will or is misread.
 //!
-//! What is read: the node tree and scenes; the one skinned mesh (the mesh of a node that
-//! has a skin; when there are several, [`ReadOptions::mesh`] picks one by mesh or node
-//! name) with `POSITION`, `NORMAL`, `TEXCOORD_0` and every `JOINTS_n`/`WEIGHTS_n` set, its
-//! triangle primitives concatenated; its skin; the animations' translation, rotation and
-//! scale channels. Buffers come from the GLB binary chunk, base64 `data:` URIs, or
-//! regular files inside the glTF's own folder ([`desal_io::confine`]). What is refused,
-//! with the file and the element: no skin, an ambiguous skinned mesh, morph targets,
+//! What is read: the node tree and scenes; every skinned mesh (the mesh of a node that has
+//! a skin, in node order, a mesh carried by several nodes once; [`ReadOptions::mesh`]
+//! picks one by mesh or node name) with `POSITION`, `NORMAL`, `TEXCOORD_0` and every
+//! `JOINTS_n`/`WEIGHTS_n` set, their triangle primitives concatenated ([`MeshPart`] says
+//! where each mesh lies); their skins merged into one (a joint per node and inverse bind
+//! matrix, the first mesh's skin as it is); without [`ReadOptions::mesh`], every mesh
+//! without a skin on a node below a joint too, rigidly skinned to that joint; the
+//! animations' translation, rotation and
+//! scale channels. Morph targets (sparse ones too) and every other attribute are checked
+//! (one element per vertex, layout) and carried into the output by [`crate::edit`]: each
+//! kept vertex keeps its deltas. Buffers come from the GLB binary chunk, base64 `data:`
+//! URIs, or regular files inside the glTF's own folder ([`desal_io::confine`]). What is
+//! refused, with the file and the element: no skin, an ambiguous skinned mesh,
 //! all-zero weights (sums off 1 are renormalised and counted in [`Rig::weight_sums`]),
 //! weights on joints the skin does not have, non-triangle
 //! primitives, non-finite values, zero-length rotations, singular inverse bind matrices,
 //! accessors that break the specification. Other meshes, materials, cameras and
-//! extensions are not read (and so not written back).
+//! extensions are not read into the [`Rig`]; [`read_rig_and_document`] keeps the whole
+//! document beside it, and [`crate::edit::write_edited`] writes them back unchanged.
 
 use std::path::{Path, PathBuf};
 
@@ -24,9 +31,10 @@ use gltf::Document;
 
 use crate::RigError;
 use crate::accessor::{Accessors, Semantic};
+use crate::edit::SourceDocument;
 use crate::model::{
-    Animation, Channel, Influences, Interpolation, LocalTransform, Node, Path as ChannelPath, Rig, Skin,
-    SkinnedMesh, WEIGHT_SUM_REPORTED, WeightSums,
+    Animation, Channel, Influences, Interpolation, LocalTransform, MeshPart, Node, Path as ChannelPath,
+    PrimitiveSpan, Rig, Skin, SkinnedMesh, WEIGHT_SUM_REPORTED, WeightSums,
 };
 
 /// How far a vertex's weights may sum from 1 and be kept as written. A vertex further off
@@ -58,7 +66,7 @@ const MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
 /// Options of [`read_rig`].
 #[derive(Debug, Clone, Default)]
 pub struct ReadOptions {
-    /// Which skinned mesh, by mesh name or node name, when the file has several.
+    /// Only this skinned mesh, by mesh or node name; `None`: every skinned mesh of the file.
     pub mesh: Option<String>,
 }
 
@@ -71,14 +79,27 @@ pub fn read_rig(path: &Path, options: &ReadOptions) -> Result<Rig, RigError> {
 
 /// Reads a rig from `bytes`; `path` names it in errors and locates external buffers.
 pub fn read_rig_from(path: &Path, bytes: &[u8], options: &ReadOptions) -> Result<Rig, RigError> {
-    // The one place desal calls into the `gltf` crate: should it panic on a file the
-    // checks let through, the caller gets an error naming the file, not an abort (and
+    read_rig_and_document(path, bytes, options).map(|(rig, _)| rig)
+}
+
+/// [`read_rig_from`], keeping the whole document (its JSON as written, every buffer) for
+/// [`crate::edit::write_edited`].
+pub fn read_rig_and_document(
+    path: &Path,
+    bytes: &[u8],
+    options: &ReadOptions,
+) -> Result<(Rig, SourceDocument), RigError> {
+    // The one place desal calls into the `gltf` crate to read: should it panic on a file
+    // the checks let through, the caller gets an error naming the file, not an abort (and
     // Python no `PanicException`).
     without_panics(path, || read_checked(path, bytes, options))
 }
 
 /// `read()`, with a panic turned into [`RigError::Panic`] naming `path`.
-fn without_panics<T>(path: &Path, read: impl FnOnce() -> Result<T, RigError>) -> Result<T, RigError> {
+pub(crate) fn without_panics<T>(
+    path: &Path,
+    read: impl FnOnce() -> Result<T, RigError>,
+) -> Result<T, RigError> {
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(read)).unwrap_or_else(|panic| {
         let message = panic
             .downcast_ref::<&str>()
@@ -89,18 +110,23 @@ fn without_panics<T>(path: &Path, read: impl FnOnce() -> Result<T, RigError>) ->
     })
 }
 
-fn read_checked(path: &Path, bytes: &[u8], options: &ReadOptions) -> Result<Rig, RigError> {
+fn read_checked(path: &Path, bytes: &[u8], options: &ReadOptions) -> Result<(Rig, SourceDocument), RigError> {
     let parsed = crate::document::parse(path, bytes)?;
     let buffers = load_buffers(path, &parsed.document, parsed.blob.as_deref())?;
     let real_size = buffers.iter().fold(bytes.len(), |sum, b| sum.saturating_add(b.len()));
-    let accessors = Accessors {
-        path,
-        buffers: &buffers,
-        quantized: parsed.extensions.iter().any(|e| e == MESH_QUANTIZATION),
+    let quantized = parsed.extensions.iter().any(|e| e == MESH_QUANTIZATION);
+    let accessors = Accessors { path, buffers: &buffers, quantized, real_size };
+    let reader = Reader { path: path.to_owned(), document: &parsed.document, accessors };
+    let rig = reader.read(options)?;
+    let source = SourceDocument {
+        path: path.to_owned(),
+        json: parsed.original,
+        document: parsed.document,
+        buffers,
+        quantized,
         real_size,
     };
-    let reader = Reader { path: path.to_owned(), document: &parsed.document, accessors };
-    reader.read(options)
+    Ok((rig, source))
 }
 
 struct Reader<'a> {
@@ -111,55 +137,158 @@ struct Reader<'a> {
 
 impl Reader<'_> {
     fn read(&self, options: &ReadOptions) -> Result<Rig, RigError> {
-        let (mesh_node, mesh, skin) = self.pick_skinned_mesh(options)?;
+        let chosen = self.pick_skinned_meshes(options)?;
         let nodes = self.document.nodes().map(|n| self.read_node(&n)).collect::<Result<Vec<_>, _>>()?;
-        let skin = self.read_skin(&skin, &nodes)?;
+        // One skin over every chosen mesh: the first mesh's skin as it is, then each other
+        // skin's joints matched to a joint of the same node and inverse bind matrix, or
+        // added (so a file with one skin gets exactly that skin).
+        let mut skin: Option<Skin> = None;
         let mut weight_sums = WeightSums::default();
-        let mesh = self.read_mesh(&mesh, &skin, &mut weight_sums)?;
+        let mut mesh: Option<SkinnedMesh> = None;
+        let mut parts = Vec::new();
+        for (node, gltf_mesh, gltf_skin) in &chosen {
+            let own = self.read_skin(gltf_skin, &nodes)?;
+            let joints = merge_skin(&mut skin, &own);
+            let mut part = self.read_mesh(gltf_mesh, Skinning::Skin(&own), &mut weight_sums)?;
+            for j in &mut part.influences.joints {
+                *j = joints[usize::from(*j)];
+            }
+            let all = mesh.get_or_insert_with(|| SkinnedMesh { primitives: Vec::new(), ..part.clone() });
+            let (vertices, triangles) = append_mesh(all, part, parts.is_empty());
+            parts.push(MeshPart {
+                node: *node,
+                mesh: gltf_mesh.index(),
+                name: mesh_name(gltf_mesh),
+                skin: Some(gltf_skin.index()),
+                joints,
+                to_bind: None,
+                vertices,
+                triangles,
+            });
+        }
+        let (skin, mesh) = (skin.expect("a mesh was chosen"), mesh.expect("a mesh was chosen"));
+        let mesh_node = parts[0].node;
         let scenes = self.document.scenes().map(|s| s.nodes().map(|n| n.index()).collect()).collect();
         let scene = self.document.default_scene().map(|s| s.index());
         self.check_keyframe_total()?;
         let animations =
             self.document.animations().map(|a| self.read_animation(&a)).collect::<Result<_, _>>()?;
-        let rig = Rig { weight_sums, nodes, scenes, scene, mesh_node, skin, animations, mesh };
+        let mut rig =
+            Rig { weight_sums, nodes, scenes, scene, mesh_node, meshes: parts, skin, animations, mesh };
         check_tree(&self.path, &rig)?;
+        if options.mesh.is_none() {
+            self.add_rigid_meshes(&mut rig)?;
+        }
         Ok(rig)
     }
 
-    /// The node carrying the skinned mesh, the mesh and its skin.
-    fn pick_skinned_mesh(
+    /// Adds every mesh of a node without a skin below a joint (a visor, a weapon) as
+    /// rigidly skinned to its nearest joint above, its vertices moved into the skin's bind
+    /// space (`MeshPart::to_bind`): in the bind pose the rig's joints are where its inverse
+    /// bind matrices put them, and in every pose the mesh follows that joint as the node
+    /// tree makes it. A mesh carried by a node not below a joint does not move with the
+    /// skeleton and passes through unchanged, as does one already read.
+    fn add_rigid_meshes(&self, rig: &mut Rig) -> Result<(), RigError> {
+        let parents = rig.parents();
+        let mut joint_of_node = std::collections::HashMap::new();
+        for (j, &n) in rig.skin.joints.iter().enumerate() {
+            joint_of_node.entry(n).or_insert(j);
+        }
+        let world = crate::pose::world_matrices(rig, &crate::pose::rest_locals(rig));
+        let mut seen: std::collections::BTreeSet<usize> = rig.meshes.iter().map(|m| m.mesh).collect();
+        let mut weight_sums = WeightSums::default();
+        for node in self.document.nodes() {
+            let Some(mesh) = node.mesh().filter(|_| node.skin().is_none()) else { continue };
+            let mut above = parents[node.index()];
+            while let Some(n) = above.filter(|n| !joint_of_node.contains_key(n)) {
+                above = parents[n];
+            }
+            let Some(anchor) = above else { continue };
+            if !seen.insert(mesh.index()) {
+                continue;
+            }
+            let joint = joint_of_node[&anchor];
+            // bind = B_j⁻¹ · W_anchor⁻¹ · W_node · local: where the joint's skinning
+            // matrix W_anchor · B_j takes it back to W_node · local in the rest pose.
+            let inverse = |m: desal_mesh::math::Mat4, what: &str| {
+                m.try_inverse().ok_or_else(|| RigError::Node {
+                    path: self.path.clone(),
+                    node: node.index(),
+                    label: crate::pose::node_label(rig, node.index()),
+                    reason: format!(
+                        "carries mesh '{}' below {what}, which is singular in the rest pose",
+                        mesh_name(&mesh)
+                    ),
+                })
+            };
+            let to_bind = inverse(rig.skin.inverse_bind_matrix(joint), "a joint whose inverse bind matrix")?
+                * inverse(world[anchor], &format!("joint node {anchor}"))?
+                * world[node.index()];
+            let mut part = self.read_mesh(&mesh, Skinning::Rigid(joint as u16), &mut weight_sums)?;
+            for p in &mut part.positions {
+                let q = crate::pose::transform_point(
+                    &to_bind,
+                    &desal_mesh::Vec3::new(p[0].into(), p[1].into(), p[2].into()),
+                );
+                *p = [q.x as f32, q.y as f32, q.z as f32];
+            }
+            if let Some(normals) = &mut part.normals {
+                let linear = to_bind.fixed_view::<3, 3>(0, 0).into_owned();
+                let normal_matrix = linear.try_inverse().map(|m| m.transpose()).unwrap_or(linear);
+                for n in normals.iter_mut() {
+                    let v = (normal_matrix * desal_mesh::Vec3::new(n[0].into(), n[1].into(), n[2].into()))
+                        .normalize();
+                    if v.iter().all(|x| x.is_finite()) {
+                        *n = [v.x as f32, v.y as f32, v.z as f32];
+                    }
+                }
+            }
+            let name = mesh_name(&mesh);
+            let (vertices, triangles) = append_mesh(&mut rig.mesh, part, false);
+            rig.meshes.push(MeshPart {
+                node: node.index(),
+                mesh: mesh.index(),
+                name,
+                skin: None,
+                joints: vec![joint as u16],
+                to_bind: Some(to_bind),
+                vertices,
+                triangles,
+            });
+        }
+        Ok(())
+    }
+
+    /// The skinned meshes to simplify, each with the first node that carries it and its
+    /// skin, in node order: every one (a mesh carried by several nodes once), or the one
+    /// [`ReadOptions::mesh`] names by mesh or node name.
+    fn pick_skinned_meshes(
         &self,
         options: &ReadOptions,
-    ) -> Result<(usize, gltf::Mesh<'_>, gltf::Skin<'_>), RigError> {
-        let skinned: Vec<(gltf::Node, gltf::Mesh, gltf::Skin)> =
+    ) -> Result<Vec<(usize, gltf::Mesh<'_>, gltf::Skin<'_>)>, RigError> {
+        let mut skinned: Vec<(gltf::Node, gltf::Mesh, gltf::Skin)> =
             self.document.nodes().filter_map(|n| Some((n.clone(), n.mesh()?, n.skin()?))).collect();
+        if skinned.is_empty() {
+            return Err(RigError::NoSkin { path: self.path.clone() });
+        }
         let label = |(n, m, _): &(gltf::Node, gltf::Mesh, gltf::Skin)| {
             format!("'{}' (node '{}')", mesh_name(m), n.name().unwrap_or("unnamed"))
         };
-        let names = skinned.iter().map(label).collect::<Vec<_>>().join(", ");
-        let chosen = match &options.mesh {
-            None if skinned.is_empty() => return Err(RigError::NoSkin { path: self.path.clone() }),
-            None if skinned.len() > 1 => {
-                return Err(RigError::SeveralSkinnedMeshes {
-                    path: self.path.clone(),
-                    count: skinned.len(),
-                    names,
-                });
-            }
-            None => 0,
-            Some(wanted) => skinned
+        if let Some(wanted) = &options.mesh {
+            let names = skinned.iter().map(label).collect::<Vec<_>>().join(", ");
+            let chosen = skinned
                 .iter()
                 .position(|(n, m, _)| m.name() == Some(wanted) || n.name() == Some(wanted))
-                .ok_or_else(|| {
-                    if skinned.is_empty() {
-                        RigError::NoSkin { path: self.path.clone() }
-                    } else {
-                        RigError::NoSuchMesh { path: self.path.clone(), wanted: wanted.clone(), names }
-                    }
-                })?,
-        };
-        let (node, mesh, skin) = skinned.into_iter().nth(chosen).expect("in range");
-        Ok((node.index(), mesh, skin))
+                .ok_or_else(|| RigError::NoSuchMesh {
+                    path: self.path.clone(),
+                    wanted: wanted.clone(),
+                    names,
+                })?;
+            skinned = vec![skinned.swap_remove(chosen)];
+        }
+        let mut seen = std::collections::BTreeSet::new();
+        skinned.retain(|(_, m, _)| seen.insert(m.index()));
+        Ok(skinned.into_iter().map(|(n, m, s)| (n.index(), m, s)).collect())
     }
 
     fn read_skin(&self, skin: &gltf::Skin<'_>, nodes: &[Node]) -> Result<Skin, RigError> {
@@ -214,7 +343,7 @@ impl Reader<'_> {
     fn read_mesh(
         &self,
         mesh: &gltf::Mesh<'_>,
-        skin: &Skin,
+        skinning: Skinning<'_>,
         weight_sums: &mut WeightSums,
     ) -> Result<SkinnedMesh, RigError> {
         let name = mesh_name(mesh);
@@ -225,6 +354,8 @@ impl Reader<'_> {
             uvs: Some(Vec::new()),
             influences: Influences::new(),
             triangles: Vec::new(),
+            primitives: Vec::new(),
+            sources: Vec::new(),
         };
         for primitive in mesh.primitives() {
             let p = primitive.index();
@@ -234,15 +365,6 @@ impl Reader<'_> {
                 primitive: p,
                 reason: reason.to_owned(),
             };
-            let targets = primitive.morph_targets().len();
-            if targets > 0 {
-                return Err(RigError::MorphTargets {
-                    path: self.path.clone(),
-                    mesh: name.clone(),
-                    primitive: p,
-                    targets,
-                });
-            }
             if primitive.mode() != gltf::mesh::Mode::Triangles {
                 return Err(bad(&format!("mode {:?}: only triangle lists are supported", primitive.mode())));
             }
@@ -274,40 +396,61 @@ impl Reader<'_> {
                 }
                 _ => out.uvs = None,
             }
-            let mut joints: Vec<Vec<[u16; 4]>> = Vec::new();
-            let mut weights: Vec<Vec<[f32; 4]>> = Vec::new();
-            for set in 0.. {
-                match (
-                    primitive.get(&gltf::Semantic::Joints(set)),
-                    primitive.get(&gltf::Semantic::Weights(set)),
-                ) {
-                    (Some(j), Some(w)) => {
-                        let j = self.accessors.integers(&j, Semantic::Joints(set), &used_by)?;
-                        // JOINTS_n are u8 or u16 (checked), so every value fits.
-                        joints.push(
-                            j.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]].map(|x| x as u16)).collect(),
-                        );
-                        let w = floats(&w, Semantic::Weights(set))?;
-                        weights.push(w.chunks_exact(4).map(|c| c.try_into().expect("4 values")).collect());
+            match skinning {
+                Skinning::Rigid(joint) => {
+                    for _ in 0..count {
+                        out.influences.push_row([(joint, 1.0)]);
                     }
-                    (None, None) => break,
-                    _ => return Err(bad(&format!("JOINTS_{set} and WEIGHTS_{set} must come together"))),
                 }
-                if joints.last().map(Vec::len) != Some(count) || weights.last().map(Vec::len) != Some(count) {
-                    return Err(bad(&format!("JOINTS_{set}/WEIGHTS_{set} do not have one entry per vertex")));
+                Skinning::Skin(skin) => {
+                    let mut joints: Vec<Vec<[u16; 4]>> = Vec::new();
+                    let mut weights: Vec<Vec<[f32; 4]>> = Vec::new();
+                    for set in 0.. {
+                        match (
+                            primitive.get(&gltf::Semantic::Joints(set)),
+                            primitive.get(&gltf::Semantic::Weights(set)),
+                        ) {
+                            (Some(j), Some(w)) => {
+                                let j = self.accessors.integers(&j, Semantic::Joints(set), &used_by)?;
+                                // JOINTS_n are u8 or u16 (checked), so every value fits.
+                                joints.push(
+                                    j.chunks_exact(4)
+                                        .map(|c| [c[0], c[1], c[2], c[3]].map(|x| x as u16))
+                                        .collect(),
+                                );
+                                let w = floats(&w, Semantic::Weights(set))?;
+                                weights.push(
+                                    w.chunks_exact(4).map(|c| c.try_into().expect("4 values")).collect(),
+                                );
+                            }
+                            (None, None) => break,
+                            _ => {
+                                return Err(bad(&format!(
+                                    "JOINTS_{set} and WEIGHTS_{set} must come together"
+                                )));
+                            }
+                        }
+                        if joints.last().map(Vec::len) != Some(count)
+                            || weights.last().map(Vec::len) != Some(count)
+                        {
+                            return Err(bad(&format!(
+                                "JOINTS_{set}/WEIGHTS_{set} do not have one entry per vertex"
+                            )));
+                        }
+                    }
+                    if joints.is_empty() {
+                        return Err(bad("has no JOINTS_0/WEIGHTS_0: the mesh is not skinned"));
+                    }
+                    weight_sums.add(self.read_influences(
+                        &joints,
+                        &weights,
+                        base,
+                        &name,
+                        skin,
+                        &mut out.influences,
+                    )?);
                 }
             }
-            if joints.is_empty() {
-                return Err(bad("has no JOINTS_0/WEIGHTS_0: the mesh is not skinned"));
-            }
-            weight_sums.add(self.read_influences(
-                &joints,
-                &weights,
-                base,
-                &name,
-                skin,
-                &mut out.influences,
-            )?);
             let indices: Vec<u32> = match primitive.indices() {
                 Some(i) => self.accessors.integers(&i, Semantic::Indices, &used_by)?,
                 None => (0..count as u32).collect(),
@@ -318,7 +461,15 @@ impl Reader<'_> {
             if let Some(i) = indices.iter().find(|&&i| i as usize >= count) {
                 return Err(bad(&format!("index {i} is out of range: the primitive has {count} vertices")));
             }
+            self.check_carried(&primitive, count, &used_by, &bad)?;
+            let first_triangle = out.triangles.len() as u32;
             out.triangles.extend(indices.chunks(3).map(|t| [t[0], t[1], t[2]].map(|i| i + base as u32)));
+            out.primitives.push(PrimitiveSpan {
+                mesh: mesh.index(),
+                primitive: p,
+                vertices: base as u32..(base + count) as u32,
+                triangles: first_triangle..out.triangles.len() as u32,
+            });
         }
         let lengths = [out.normals.as_ref().map(Vec::len), out.uvs.as_ref().map(Vec::len)];
         if lengths.iter().flatten().any(|&l| l != out.positions.len()) {
@@ -339,6 +490,41 @@ impl Reader<'_> {
         }
         Ok(out)
     }
+    /// Checks every attribute and morph target delta of `primitive` that the simplified
+    /// rig carries ([`crate::edit`]): one element per vertex (`count`), each accessor's
+    /// layout (sparse ones included) within its buffer, so that writing cannot fail on
+    /// them. The attributes desal reads itself were checked as they were read.
+    fn check_carried(
+        &self,
+        primitive: &gltf::Primitive<'_>,
+        count: usize,
+        used_by: &str,
+        bad: &dyn Fn(&str) -> RigError,
+    ) -> Result<(), RigError> {
+        use gltf::Semantic as S;
+        let read_by_desal =
+            |s: &S| matches!(s, S::Positions | S::Normals | S::TexCoords(0) | S::Joints(_) | S::Weights(_));
+        let targets = primitive.morph_targets().enumerate().flat_map(|(t, target)| {
+            [("POSITION", target.positions()), ("NORMAL", target.normals()), ("TANGENT", target.tangents())]
+                .into_iter()
+                .filter_map(move |(name, a)| Some((format!("morph target {t} {name}"), a?)))
+        });
+        let attributes =
+            primitive.attributes().map(|(semantic, a)| (read_by_desal(&semantic), semantic.to_string(), a));
+        for (read, what, accessor) in attributes.chain(targets.map(|(what, a)| (false, what, a))) {
+            if accessor.count() != count {
+                return Err(bad(&format!(
+                    "{what} has {} elements but POSITION has {count}",
+                    accessor.count()
+                )));
+            }
+            if !read {
+                self.accessors.check(&accessor, Semantic::Carried, &format!("{used_by} {what}"))?;
+            }
+        }
+        Ok(())
+    }
+
     /// Checks and appends the influences of one primitive's vertices (`base..`).
     fn read_influences(
         &self,
@@ -488,7 +674,7 @@ impl Reader<'_> {
                 gltf::animation::Property::Translation => (ChannelPath::Translation, Semantic::Translation),
                 gltf::animation::Property::Rotation => (ChannelPath::Rotation, Semantic::Rotation),
                 gltf::animation::Property::Scale => (ChannelPath::Scale, Semantic::Scale),
-                // Morph target weights: the mesh has no morph targets (they are refused).
+                // Morph target weights: carried unchanged with the animation (desal poses by skinning only).
                 gltf::animation::Property::MorphTargetWeights => {
                     self.accessors.check(&sampler.output(), Semantic::MorphWeights, &used_by)?;
                     continue;
@@ -593,6 +779,75 @@ fn check_tree(path: &Path, rig: &Rig) -> Result<(), RigError> {
         }
     }
     Ok(())
+}
+
+/// How a mesh's vertices follow the skeleton.
+#[derive(Clone, Copy)]
+enum Skinning<'s> {
+    /// By its skin's `JOINTS_n`/`WEIGHTS_n`.
+    Skin(&'s Skin),
+    /// Rigidly with this joint of the rig (a mesh below a bone, with no skin).
+    Rigid(u16),
+}
+
+/// Merges `own` (a skin of one mesh) into the rig's one skin, which `own` starts when
+/// there is none; returns the rig joint of each of `own`'s joints.
+fn merge_skin(skin: &mut Option<Skin>, own: &Skin) -> Vec<u16> {
+    let Some(skin) = skin else {
+        *skin = Some(own.clone());
+        return (0..own.joints.len() as u16).collect();
+    };
+    let key = |node: usize, m: &[f32; 16]| (node, m.map(f32::to_bits));
+    let mut index: std::collections::HashMap<_, u16> = std::collections::HashMap::new();
+    for (j, (&node, m)) in skin.joints.iter().zip(&skin.inverse_bind).enumerate() {
+        index.entry(key(node, m)).or_insert(j as u16);
+    }
+    own.joints
+        .iter()
+        .zip(&own.inverse_bind)
+        .map(|(&node, m)| {
+            *index.entry(key(node, m)).or_insert_with(|| {
+                skin.joints.push(node);
+                skin.inverse_bind.push(*m);
+                (skin.joints.len() - 1) as u16
+            })
+        })
+        .collect()
+}
+
+/// Appends `part` (one mesh, its joints already the rig's) to `all`, which holds it
+/// already when `first`; returns its vertex and triangle ranges in `all`.
+fn append_mesh(
+    all: &mut SkinnedMesh,
+    part: SkinnedMesh,
+    first: bool,
+) -> (std::ops::Range<u32>, std::ops::Range<u32>) {
+    if first {
+        all.primitives = part.primitives;
+        return (0..all.vertex_count() as u32, 0..all.triangles.len() as u32);
+    }
+    let (base, first_triangle) = (all.vertex_count() as u32, all.triangles.len() as u32);
+    all.name = format!("{}+{}", all.name, part.name);
+    all.positions.extend(&part.positions);
+    // An attribute is kept only when every mesh has it.
+    match (&mut all.normals, part.normals) {
+        (Some(a), Some(b)) => a.extend(b),
+        (normals, _) => *normals = None,
+    }
+    match (&mut all.uvs, part.uvs) {
+        (Some(a), Some(b)) => a.extend(b),
+        (uvs, _) => *uvs = None,
+    }
+    for v in 0..part.positions.len() {
+        all.influences.push_row(part.influences.of(v).map(|(j, w)| (j as u16, w)));
+    }
+    all.triangles.extend(part.triangles.iter().map(|t| t.map(|i| i + base)));
+    all.primitives.extend(part.primitives.into_iter().map(|p| PrimitiveSpan {
+        vertices: p.vertices.start + base..p.vertices.end + base,
+        triangles: p.triangles.start + first_triangle..p.triangles.end + first_triangle,
+        ..p
+    }));
+    (base..all.vertex_count() as u32, first_triangle..all.triangles.len() as u32)
 }
 
 /// Flat `[x, y, z, x, y, z, ...]` values as triples.

@@ -64,6 +64,8 @@ mod tests {
             uvs: None,
             influences,
             triangles: vec![[0, 1, 2], [4, 5, 3]],
+            primitives: Vec::new(),
+            sources: Vec::new(),
         };
         let weld = Weld::new(&mesh);
         assert_eq!(weld.welded_count(), 4);

@@ -20,7 +20,7 @@ use desal_mesh::math::Mat4;
 use desal_mesh::{Face, Vec3};
 
 use crate::RigError;
-use crate::model::{Influences, Rig, SkinnedMesh};
+use crate::model::{Influences, PrimitiveSpan, Rig, SkinnedMesh};
 use crate::refit::{MAX_INFLUENCES, fit_weights, residual};
 use crate::weld::Weld;
 
@@ -67,8 +67,10 @@ pub struct SimplifiedReport {
 /// How many influences each simplified vertex keeps.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct WeightOptions {
-    /// At most this many influences per vertex (at least 1): subset placement keeps a
-    /// vertex's largest weights, renormalised, and the refit fits at most this many.
+    /// At most this many influences per vertex (at least 1): subset placement keeps, of a
+    /// vertex with more, the ones of its own joints that skin it closest over the poses
+    /// (refitted, or its largest renormalised when they do better), and the refit fits at
+    /// most this many.
     /// `None`: subset placement keeps the exact weights, however many (the sample has up
     /// to 7), and the refit keeps at most [`MAX_INFLUENCES`].
     pub max_influences: Option<usize>,
@@ -96,27 +98,56 @@ pub fn simplified_rig_with(
     check_input(weld, simplified)?;
     let mesh = &rig.mesh;
 
-    // 1. A copy per corner, and one output vertex per (simp, copy) in order of first use.
-    let mut out_index: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
-    let mut out_vertices: Vec<(u32, u32)> = Vec::new();
-    let mut triangles = Vec::with_capacity(simplified.faces.len());
+    // 1. A copy per corner; each face goes to the primitive most of its corners' copies
+    //    lie in (the first corner's when all three differ), so every primitive keeps its
+    //    own faces and material.
+    let primitive_of = |split: u32| mesh.primitive_of(split).unwrap_or(0);
+    let mut faces_of: Vec<Vec<[(u32, u32); 3]>> = vec![Vec::new(); mesh.primitives.len().max(1)];
     let charts = uv_charts(mesh);
     let mut cross_chart_faces = 0;
     for face in simplified.faces {
-        let copies =
-            pick_copies(mesh, face.map(|s| weld.copies_of(simplified.simp_to_welded[s as usize] as usize)));
+        let welded = face.map(|s| simplified.simp_to_welded[s as usize] as usize);
+        let copies = pick_copies(mesh, welded.map(|w| weld.copies_of(w)));
         if let Some(charts) = &charts {
             cross_chart_faces +=
                 usize::from(copies.iter().any(|&c| charts[c as usize] != charts[copies[0] as usize]));
         }
-        let mut corners = [0u32; 3];
-        for ((corner, &s), copy) in corners.iter_mut().zip(face).zip(copies) {
-            *corner = *out_index.entry((s, copy)).or_insert_with(|| {
-                out_vertices.push((s, copy));
-                (out_vertices.len() - 1) as u32
+        let primitives = copies.map(primitive_of);
+        let p = if primitives[1] == primitives[2] { primitives[1] } else { primitives[0] };
+        // A corner whose chosen copy lies in another primitive takes one of its own, if any.
+        let corner = |i: usize| {
+            let own = weld.copies_of(welded[i]).iter().find(|&&c| primitive_of(c) == p);
+            (face[i], if primitives[i] == p { copies[i] } else { own.copied().unwrap_or(copies[i]) })
+        };
+        faces_of[p].push([corner(0), corner(1), corner(2)]);
+    }
+
+    // One output vertex per (simp, copy) of a primitive, in order of first use; the
+    // primitives' runs in their input order.
+    let mut out_vertices: Vec<(u32, u32)> = Vec::new();
+    let mut triangles = Vec::with_capacity(simplified.faces.len());
+    let mut primitives = Vec::new();
+    for (p, faces) in faces_of.iter().enumerate() {
+        let mut out_index: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+        let (first_vertex, first_triangle) = (out_vertices.len() as u32, triangles.len() as u32);
+        for face in faces {
+            triangles.push(face.map(|key| {
+                *out_index.entry(key).or_insert_with(|| {
+                    out_vertices.push(key);
+                    (out_vertices.len() - 1) as u32
+                })
+            }));
+        }
+        if let Some(span) = mesh.primitives.get(p)
+            && !faces.is_empty()
+        {
+            primitives.push(PrimitiveSpan {
+                mesh: span.mesh,
+                primitive: span.primitive,
+                vertices: first_vertex..out_vertices.len() as u32,
+                triangles: first_triangle..triangles.len() as u32,
             });
         }
-        triangles.push(corners);
     }
 
     // 3. Influences per simplified vertex (the same for all its copies).
@@ -158,15 +189,34 @@ pub fn simplified_rig_with(
         max_influences: influences.max_influences(),
         cross_chart_faces,
     };
-    let out_mesh = SkinnedMesh { name: mesh.name.clone(), positions, normals, uvs, influences, triangles };
+    let sources = out_vertices.iter().map(|&(_, copy)| copy).collect();
+    let out_mesh = SkinnedMesh {
+        name: mesh.name.clone(),
+        positions,
+        normals,
+        uvs,
+        influences,
+        triangles,
+        primitives,
+        sources,
+    };
     let mut out = rig.clone();
+    // Each glTF mesh's run of the output: its primitives' runs, which follow one another.
+    for part in &mut out.meshes {
+        let runs: Vec<&PrimitiveSpan> = out_mesh.primitives.iter().filter(|p| p.mesh == part.mesh).collect();
+        let (first, last) = (runs.first(), runs.last());
+        let end = |r: Option<&&PrimitiveSpan>| r.map_or(0, |r| r.vertices.end);
+        part.vertices = first.map_or(end(last), |r| r.vertices.start)..end(last);
+        part.triangles = first.map_or(0, |r| r.triangles.start)..last.map_or(0, |r| r.triangles.end);
+    }
     out.mesh = out_mesh;
     Ok((out, report))
 }
 
 /// The joints and weights of every simplified vertex (`simp` space), and how many were
-/// refitted. Subset placement: the mapped welded vertex's exact weights (its largest
-/// `max_influences`, renormalised, when capped). Optimal placement: the least-squares
+/// refitted. Subset placement: the mapped welded vertex's exact weights (when capped, at
+/// most `max_influences` of its own joints fitted over `targets`: [`capped_weights`]).
+/// Optimal placement: the least-squares
 /// refit over `targets` ([`refit_vertex`]). `desal eval` calls this with the training
 /// poses of each fold, so a held-out pose never reaches the weights it is skinned with.
 pub fn simplified_influences(
@@ -184,9 +234,9 @@ pub fn simplified_influences(
                 let representative = weld.copies_of(welded as usize)[0] as usize;
                 let exact = mesh.influences.of(representative);
                 match options.max_influences {
-                    Some(limit) if mesh.influences.of(representative).count() > limit => to_f32_weights(
-                        &largest_normalised(exact.map(|(j, w)| (j, f64::from(w))).collect(), limit),
-                    ),
+                    Some(limit) if mesh.influences.of(representative).count() > limit => {
+                        capped_weights(mesh, representative, welded as usize, targets, limit)
+                    }
                     _ => exact.map(|(j, w)| (j as u16, w)).collect(),
                 }
             })
@@ -225,11 +275,12 @@ fn check_input(weld: &Weld, s: &SimplifiedInput) -> Result<(), RigError> {
     Ok(())
 }
 
-/// The split copies of a face's three corners whose attributes (UV, normal) lie
-/// closest together: the least sum of squared attribute distances over the face's three
-/// edges, ties to the lower split indices. A face on one side of a seam has all its
-/// corners' copies on that side close together; a copy from the other side would stretch
-/// the face across the texture.
+/// The split copies of a face's three corners in the fewest primitives, and among those
+/// the ones whose attributes (UV, normal) lie closest together: the least sum of squared
+/// attribute distances over the face's three edges, ties to the lower split indices. A
+/// face on one side of a seam (a UV seam or the border between two primitives) has all
+/// its corners' copies on that side close together; a copy from the other side would
+/// stretch the face across the texture, or into another material.
 fn pick_copies(mesh: &SkinnedMesh, copies: [&[u32]; 3]) -> [u32; 3] {
     if copies.iter().all(|c| c.len() == 1) {
         return copies.map(|c| c[0]);
@@ -245,18 +296,23 @@ fn pick_copies(mesh: &SkinnedMesh, copies: [&[u32]; 3]) -> [u32; 3] {
         }
         d
     };
-    let mut best = (f64::INFINITY, copies.map(|c| c[0]));
+    let primitive_count = |corners: [u32; 3]| {
+        let p = corners.map(|c| mesh.primitive_of(c));
+        1 + usize::from(p[1] != p[0]) + usize::from(p[2] != p[0] && p[2] != p[1])
+    };
+    let mut best = (usize::MAX, f64::INFINITY, copies.map(|c| c[0]));
     for &a in copies[0] {
         for &b in copies[1] {
             for &c in copies[2] {
+                let primitives = primitive_count([a, b, c]);
                 let d = attribute_distance(a, b) + attribute_distance(b, c) + attribute_distance(c, a);
-                if d < best.0 {
-                    best = (d, [a, b, c]);
+                if (primitives, d) < (best.0, best.1) {
+                    best = (primitives, d, [a, b, c]);
                 }
             }
         }
     }
-    best.1
+    best.2
 }
 
 /// The UV chart of every split vertex: connected components of the split mesh (`None`
@@ -327,6 +383,32 @@ fn refit_vertex(
         _ => (own, false),
     };
     (to_f32_weights(&weights), refitted)
+}
+
+/// At most `limit` of the split vertex `representative`'s own joints (welded vertex
+/// `welded`), weighted to skin it as closely as they can to where all its joints put it
+/// over the poses of `targets`: the non-negative least-squares refit over its own joints
+/// ([`fit_weights`]) when it skins closer than its `limit` largest weights renormalised
+/// (which it never does only when they are already the best), else those.
+fn capped_weights(
+    mesh: &SkinnedMesh,
+    representative: usize,
+    welded: usize,
+    targets: &PoseTargets,
+    limit: usize,
+) -> Vec<(u16, f32)> {
+    let own: Vec<(usize, f64)> = mesh.influences.of(representative).map(|(j, w)| (j, f64::from(w))).collect();
+    let largest = largest_normalised(own.clone(), limit);
+    let p = mesh.positions[representative];
+    let x = Vec3::new(p[0].into(), p[1].into(), p[2].into());
+    let y: Vec<Vec3> = targets.positions.iter().map(|pose| pose[welded]).collect();
+    let joints: Vec<usize> = own.iter().map(|w| w.0).collect();
+    let largest_residual = residual(&x, &largest, targets.joints, &y);
+    let weights = match fit_weights(&x, &joints, targets.joints, &y, limit) {
+        Some((fit, r)) if r < largest_residual => fit,
+        _ => largest,
+    };
+    to_f32_weights(&weights)
 }
 
 /// The `limit` largest weights, renormalised.

@@ -8,7 +8,8 @@
 //! output (see [`crate::write`]): each corner takes the copy its side of the seam used.
 //!
 //! Welded vertices are numbered in order of their first split vertex, so a mesh without
-//! seams welds to itself.
+//! seams welds to itself. Vertices of two glTF meshes of a rig never weld, so each mesh
+//! is a run of welded vertices (meshes follow one another in [`crate::Rig::meshes`]).
 
 use std::collections::HashMap;
 
@@ -40,6 +41,8 @@ impl Weld {
         let mut welded_count = 0u32;
         for (v, p) in mesh.positions.iter().enumerate() {
             let mut key: Vec<u32> = p.iter().map(|x| canonical_bits(*x)).collect();
+            // Vertices of different glTF meshes never weld: each mesh is written back apart.
+            key.push(mesh.primitive_of(v as u32).map_or(0, |s| mesh.primitives[s].mesh) as u32);
             for (j, w) in mesh.influences.of(v) {
                 key.push(j as u32);
                 key.push(w.to_bits());

@@ -13,8 +13,9 @@ use desal_rig::model::{Path as ChannelPath, SkinnedMesh};
 use desal_rig::pose::{animated_locals, sample_channel};
 use desal_rig::{
     Animation, Channel, FrameConfig, Influences, Interpolation, LocalTransform, Node, PartsConfig,
-    PoseSource, PoseTargets, ReadOptions, Rig, RigError, SimplifiedInput, Skin, dominant_joint_parts,
-    joint_matrices, pose_rig, read_rig_from, sample_frames, simplified_rig, skin_points, write_glb,
+    PoseSource, PoseTargets, PrimitiveSpan, ReadOptions, Rig, RigError, SimplifiedInput, Skin,
+    dominant_joint_parts, joint_matrices, pose_rig, read_rig_from, sample_frames, simplified_rig,
+    skin_points, write_glb,
 };
 
 /// Rings along the limb (y from 0 to 2) and segments around it.
@@ -74,7 +75,16 @@ fn limb() -> Rig {
             })
             .collect(),
     );
-    let mesh = SkinnedMesh { name: "limb".into(), positions, normals, uvs: Some(uvs), influences, triangles };
+    let mesh = SkinnedMesh {
+        name: "limb".into(),
+        positions,
+        normals,
+        uvs: Some(uvs),
+        influences,
+        triangles,
+        primitives: Vec::new(),
+        sources: Vec::new(),
+    };
     let mut lower_ibm = identity();
     lower_ibm[13] = -1.0;
     let quarter = std::f32::consts::FRAC_PI_4.sin();
@@ -96,6 +106,7 @@ fn limb() -> Rig {
         scenes: vec![vec![0, 2]],
         scene: Some(0),
         mesh_node: 2,
+        meshes: Vec::new(),
         skin: Skin {
             name: Some("skin".into()),
             joints: vec![0, 1],
@@ -133,7 +144,10 @@ fn a_rig_survives_a_round_trip_through_glb_bit_for_bit() {
     let rig = limb();
     let bytes = write_glb(&rig).unwrap();
     let back = read(&bytes).unwrap();
-    assert_eq!(back, rig);
+    let (vertices, triangles) = (rig.mesh.vertex_count() as u32, rig.mesh.triangles.len() as u32);
+    let one = PrimitiveSpan { mesh: 0, primitive: 0, vertices: 0..vertices, triangles: 0..triangles };
+    assert_eq!(back.mesh.primitives, [one], "the reader says where the vertices come from");
+    assert_eq!(without_provenance(back.clone()), rig);
     // Same rig, same bytes.
     assert_eq!(write_glb(&back).unwrap(), bytes);
 }
@@ -333,7 +347,15 @@ fn the_simplified_limb_keeps_its_uv_seams_and_exact_weights_with_subset_placemen
     assert_eq!((&out.nodes, &out.skin, &out.animations), (&rig.nodes, &rig.skin, &rig.animations));
     // And it is a file the reader takes back.
     let back = read(&write_glb(&out).unwrap()).unwrap();
-    assert_eq!(back, out);
+    assert_eq!(without_provenance(back), without_provenance(out));
+}
+
+/// `rig` without what says where its mesh came from (its primitives, its source vertices).
+fn without_provenance(mut rig: Rig) -> Rig {
+    rig.mesh.primitives.clear();
+    rig.meshes.clear();
+    rig.mesh.sources.clear();
+    rig
 }
 
 /// The weld's seam edges are exactly the two seams: the wrap seam along the limb (its
@@ -452,22 +474,124 @@ fn a_mesh_without_a_skin_is_refused() {
     assert!(m.starts_with("limb.glb: no skinned mesh"), "{m}");
 }
 
+/// Issue 42, item 2: without `mesh`, every skinned mesh is read (a mesh carried by two
+/// nodes once); `mesh` picks one by mesh or node name.
 #[test]
-fn several_skinned_meshes_are_named_and_mesh_picks_one() {
+fn every_skinned_mesh_is_read_and_mesh_picks_one() {
     let bytes = edit_json(&write_glb(&limb()).unwrap(), |j| {
         j["nodes"].as_array_mut().unwrap().push(serde_json::json!({"name": "body2", "mesh": 0, "skin": 0}));
         j["scenes"][0]["nodes"].as_array_mut().unwrap().push(3.into());
     });
-    let m = message(read(&bytes));
-    assert!(
-        m.contains("2 skinned meshes ('limb' (node 'body'), 'limb' (node 'body2'))") && m.contains("mesh = "),
-        "{m}"
-    );
+    let one = read(&bytes).unwrap();
+    assert_eq!((one.meshes.len(), one.mesh_node), (1, 2), "one mesh, from its first node");
     let picked =
         read_rig_from(Path::new("limb.glb"), &bytes, &ReadOptions { mesh: Some("body2".into()) }).unwrap();
     assert_eq!(picked.mesh_node, 3);
     let m = message(read_rig_from(Path::new("limb.glb"), &bytes, &ReadOptions { mesh: Some("arm".into()) }));
     assert!(m.contains("no skinned mesh or node is called 'arm'"), "{m}");
+}
+
+/// The limb with a second skinned mesh, `sleeve`: the limb's own accessors (so the same
+/// positions) on node `sleeve`, skinned by a second skin over the same joints in the
+/// other order with the same inverse bind matrices.
+fn limb_and_sleeve() -> Vec<u8> {
+    let rig = limb();
+    let glb = write_glb(&rig).unwrap();
+    let parsed = gltf::binary::Glb::from_slice(&glb).unwrap();
+    let mut j: serde_json::Value = serde_json::from_slice(&parsed.json).unwrap();
+    let mut bin = parsed.bin.unwrap().into_owned();
+    let swapped: Vec<u8> = [rig.skin.inverse_bind[1], rig.skin.inverse_bind[0]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let views = j["bufferViews"].as_array_mut().unwrap();
+    views.push(serde_json::json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": swapped.len()}));
+    let view = views.len() - 1;
+    bin.extend(swapped);
+    j["buffers"][0]["byteLength"] = bin.len().into();
+    let accessors = j["accessors"].as_array_mut().unwrap();
+    accessors
+        .push(serde_json::json!({"bufferView": view, "componentType": 5126, "count": 2, "type": "MAT4"}));
+    let ibm = accessors.len() - 1;
+    let mut sleeve = j["meshes"][0].clone();
+    sleeve["name"] = "sleeve".into();
+    j["meshes"].as_array_mut().unwrap().push(sleeve);
+    let mut skin = j["skins"][0].clone();
+    skin["joints"] = serde_json::json!([1, 0]);
+    skin["inverseBindMatrices"] = ibm.into();
+    j["skins"].as_array_mut().unwrap().push(skin);
+    j["nodes"].as_array_mut().unwrap().push(serde_json::json!({"name": "sleeve", "mesh": 1, "skin": 1}));
+    j["scenes"][0]["nodes"].as_array_mut().unwrap().push(3.into());
+    let json = serde_json::to_vec(&j).unwrap();
+    gltf::binary::Glb { header: parsed.header, json: json.into(), bin: Some(bin.into()) }.to_vec().unwrap()
+}
+
+/// Issue 42, item 2: two skinned meshes are one rig: their skins merged (joints matched by
+/// node and inverse bind matrix), their vertices never welded together, both simplified
+/// together and written back each into its own mesh, each with its own skin's joints.
+#[test]
+fn issue_42_two_skinned_meshes_are_simplified_together_and_written_apart() {
+    let bytes = limb_and_sleeve();
+    let (rig, source) =
+        desal_rig::read_rig_and_document(Path::new("limb.glb"), &bytes, &ReadOptions::default()).unwrap();
+    let single = limb();
+    assert_eq!(rig.skin.joints, single.skin.joints, "the second skin's joints are the first's");
+    assert_eq!(rig.meshes.len(), 2);
+    assert_eq!((rig.meshes[1].name.as_str(), rig.meshes[1].joints.as_slice()), ("sleeve", &[1u16, 0][..]));
+    let n = single.mesh.vertex_count() as u32;
+    assert_eq!((rig.meshes[0].vertices.clone(), rig.meshes[1].vertices.clone()), (0..n, n..2 * n));
+    // The sleeve shares the limb's JOINTS_0, which its skin reads the other way round.
+    let swapped = |v: usize| rig.mesh.influences.of(v).map(|(j, w)| (1 - j, w)).collect::<Vec<_>>();
+    assert!(
+        (0..n as usize).all(|v| swapped(v) == rig.mesh.influences.of(v + n as usize).collect::<Vec<_>>())
+    );
+    let weld = desal_rig::Weld::new(&rig.mesh);
+    assert_eq!(
+        weld.welded_count(),
+        2 * desal_rig::Weld::new(&single.mesh).welded_count(),
+        "never welded across"
+    );
+
+    let (posed, mesh, simp_to_welded) = simplify_limb(&rig, desal_simplify::Placement::Subset, 120, true);
+    let input = SimplifiedInput {
+        positions: &mesh.positions,
+        faces: &mesh.faces,
+        simp_to_welded: &simp_to_welded,
+        subset: true,
+    };
+    let targets = PoseTargets { joints: &posed.joints, positions: &posed.poses.poses };
+    let (out, _) = simplified_rig(&rig, &posed.weld, &input, &targets).unwrap();
+    assert_eq!(out.mesh.primitives.iter().map(|p| p.mesh).collect::<Vec<_>>(), [0, 1], "both meshes kept");
+    let edited = desal_rig::write_edited(&source, &rig, &out).unwrap();
+    let (json, bin) = json_and_bin(&edited.bytes);
+    assert_eq!(json["skins"], json_and_bin(&bytes).0["skins"], "both skins as they were");
+    let back = read(&edited.bytes).unwrap();
+    assert_eq!(back.meshes.len(), 2);
+    // Each written vertex is its source vertex, with its own skin's joint numbers: the
+    // sleeve's JOINTS_0 names its skin's joints ([1, 0]), so joint 0 there is the limb's 1.
+    let joints_of = |m: usize| -> Vec<u16> {
+        let a = &json["accessors"]
+            [json["meshes"][m]["primitives"][0]["attributes"]["JOINTS_0"].as_u64().unwrap() as usize];
+        view_bytes(&json, &bin, &a["bufferView"])
+            .chunks_exact(2)
+            .map(|c| u16::from_le_bytes([c[0], c[1]]))
+            .collect()
+    };
+    let (limb_joints, sleeve_joints) = (joints_of(0), joints_of(1));
+    assert_eq!(out.meshes[1].vertices.start, out.meshes[0].vertices.end);
+    for (part, input_part) in out.meshes.iter().zip(&rig.meshes) {
+        for v in part.vertices.clone() {
+            let s = out.mesh.sources[v as usize] as usize;
+            assert!(input_part.vertices.contains(&(s as u32)), "vertex {v} comes from its own mesh");
+            assert_eq!(out.mesh.positions[v as usize], rig.mesh.positions[s]);
+        }
+    }
+    let first_sleeve = out.mesh.primitives[1].vertices.start as usize;
+    let local = |v: usize| out.mesh.influences.of(v).map(|(j, _)| j as u16).collect::<Vec<_>>();
+    assert_eq!(limb_joints[..local(0).len()], local(0)[..]);
+    let sleeve_local: Vec<u16> = local(first_sleeve).iter().map(|&j| 1 - j).collect();
+    assert_eq!(sleeve_joints[..sleeve_local.len()], sleeve_local[..]);
 }
 
 /// Weights off 1 (quantised, as exporters write them) are renormalised and counted, the
@@ -523,13 +647,107 @@ fn a_joint_the_skin_does_not_have_is_refused() {
     assert!(m.contains("vertex 0: joint 5 has weight 1, but skin 'skin' has only 2 joints"), "{m}");
 }
 
+/// The limb with two morph targets: `wide` moves every vertex (dense), `blink` two of
+/// them (a sparse accessor over no buffer view); named in `extras.targetNames`, with
+/// default weights.
+fn limb_with_morph_targets() -> Vec<u8> {
+    use serde_json::json;
+    let glb = write_glb(&limb()).unwrap();
+    let parsed = gltf::binary::Glb::from_slice(&glb).unwrap();
+    let mut j: serde_json::Value = serde_json::from_slice(&parsed.json).unwrap();
+    let mut bin = parsed.bin.unwrap().into_owned();
+    let n = limb().mesh.vertex_count();
+    let dense: Vec<u8> = (0..n).flat_map(wide_delta).flat_map(|x| x.to_le_bytes()).collect();
+    let sparse_indices: Vec<u8> = [3u16, 10].iter().flat_map(|i| i.to_le_bytes()).collect();
+    let sparse_values: Vec<u8> =
+        [[0.0f32, 0.0, 0.5], [0.0, 0.0, -0.5]].iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    let mut view = |bytes: &[u8]| {
+        let views = j["bufferViews"].as_array_mut().unwrap();
+        views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()}));
+        bin.extend_from_slice(bytes);
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        views.len() - 1
+    };
+    let (dense_view, index_view, value_view) = (view(&dense), view(&sparse_indices), view(&sparse_values));
+    let accessors = j["accessors"].as_array_mut().unwrap();
+    let extent = (n as f32 - 1.0) * 0.001;
+    accessors.push(json!({"bufferView": dense_view, "componentType": 5126, "count": n, "type": "VEC3",
+        "min": [0.0, 0.0, 0.0], "max": [extent, 0.0, 0.0]}));
+    accessors.push(json!({"componentType": 5126, "count": n, "type": "VEC3", "min": [0.0, 0.0, -0.5], "max": [0.0, 0.0, 0.5],
+        "sparse": {"count": 2, "indices": {"bufferView": index_view, "componentType": 5123},
+                   "values": {"bufferView": value_view}}}));
+    let (wide, blink) = (accessors.len() - 2, accessors.len() - 1);
+    j["buffers"][0]["byteLength"] = bin.len().into();
+    j["meshes"][0]["primitives"][0]["targets"] = json!([{"POSITION": wide}, {"POSITION": blink}]);
+    j["meshes"][0]["weights"] = json!([0.25, 0.0]);
+    j["meshes"][0]["extras"] = json!({"targetNames": ["wide", "blink"]});
+    let json = serde_json::to_vec(&j).unwrap();
+    gltf::binary::Glb { header: parsed.header, json: json.into(), bin: Some(bin.into()) }.to_vec().unwrap()
+}
+
+fn wide_delta(v: usize) -> [f32; 3] {
+    [v as f32 * 0.001, 0.0, 0.0]
+}
+
+/// Issue 42, item 3: morph targets are kept. Each kept vertex keeps its own deltas (the
+/// sparse target read and written dense), and the targets' names and default weights stay.
 #[test]
-fn morph_targets_are_refused() {
+fn issue_42_morph_targets_are_kept_with_each_kept_vertex_s_deltas() {
+    let bytes = limb_with_morph_targets();
+    let path = Path::new("limb.glb");
+    let (rig, source) = desal_rig::read_rig_and_document(path, &bytes, &ReadOptions::default()).unwrap();
+    let (posed, mesh, simp_to_welded) = simplify_limb(&rig, desal_simplify::Placement::Subset, 60, true);
+    let input = SimplifiedInput {
+        positions: &mesh.positions,
+        faces: &mesh.faces,
+        simp_to_welded: &simp_to_welded,
+        subset: true,
+    };
+    let targets = PoseTargets { joints: &posed.joints, positions: &posed.poses.poses };
+    let (out, _) = simplified_rig(&rig, &posed.weld, &input, &targets).unwrap();
+    let edited = desal_rig::write_edited(&source, &rig, &out).unwrap();
+    let (json, bin) = json_and_bin(&edited.bytes);
+    assert_eq!(json["meshes"][0]["weights"], serde_json::json!([0.25, 0.0]));
+    assert_eq!(json["meshes"][0]["extras"]["targetNames"], serde_json::json!(["wide", "blink"]));
+    let delta = |t: usize| -> Vec<[f32; 3]> {
+        let a = &json["accessors"]
+            [json["meshes"][0]["primitives"][0]["targets"][t]["POSITION"].as_u64().unwrap() as usize];
+        assert!(a.get("sparse").is_none() && a.get("min").is_some());
+        let floats: Vec<f32> = view_bytes(&json, &bin, &a["bufferView"])
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        floats.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+    };
+    let (wide, blink) = (delta(0), delta(1));
+    assert_eq!(wide.len(), out.mesh.vertex_count());
+    let mut blinking = 0;
+    for (v, &s) in out.mesh.sources.iter().enumerate() {
+        assert_eq!(wide[v], wide_delta(s as usize), "vertex {v}");
+        let expected = match s {
+            3 => [0.0, 0.0, 0.5],
+            10 => [0.0, 0.0, -0.5],
+            _ => [0.0; 3],
+        };
+        blinking += usize::from(expected != [0.0; 3]);
+        assert_eq!(blink[v], expected, "vertex {v}");
+    }
+    // Vertices 3 and 10 lie on the open end ring, which simplification keeps.
+    assert_eq!(blinking, 2, "both blinking vertices are kept");
+    // The output reads back.
+    read(&edited.bytes).unwrap();
+}
+
+/// A morph target with another count than its primitive's vertices is refused at read.
+#[test]
+fn a_morph_target_of_the_wrong_count_is_refused() {
     let bytes = edit_json(&write_glb(&limb()).unwrap(), |j| {
-        j["meshes"][0]["primitives"][0]["targets"] = serde_json::json!([{"POSITION": 0}]);
+        j["meshes"][0]["primitives"][0]["targets"] = serde_json::json!([{"POSITION": 5}]);
     });
     let m = message(read(&bytes));
-    assert!(m.contains("mesh 'limb' primitive 0 has 1 morph target(s)"), "{m}");
+    assert!(m.contains("mesh 'limb' primitive 0: morph target 0 POSITION has"), "{m}");
 }
 
 #[test]
@@ -538,4 +756,292 @@ fn poses_from_animations_need_an_animation() {
     rig.animations.clear();
     let err = sample_frames(&rig, &FrameConfig::default(), Path::new("limb.glb")).unwrap_err();
     assert!(err.to_string().starts_with("limb.glb: poses = \"animations\""), "{err}");
+}
+
+/// The limb as an avatar document: two materials (one with an extension), textures, a
+/// sampler, an embedded image and one beside the file, a camera and a light on a node, a
+/// rigid visor mesh on the lower joint, VRM 0.x and 1.0 extensions, `extras` on every
+/// kind of element, and a `COLOR_0` of 3-byte elements. Returns the `.vrm` bytes.
+fn avatar_document(dir: &Path) -> Vec<u8> {
+    use serde_json::json;
+    std::fs::create_dir_all(dir.join("tex")).unwrap();
+    std::fs::write(dir.join("tex/skin.png"), EXTERNAL_IMAGE).unwrap();
+    let rig = limb();
+    let glb = write_glb(&rig).unwrap();
+    let parsed = gltf::binary::Glb::from_slice(&glb).unwrap();
+    let mut j: serde_json::Value = serde_json::from_slice(&parsed.json).unwrap();
+    let mut bin = parsed.bin.unwrap().into_owned();
+    let mut view = |bin: &mut Vec<u8>, bytes: &[u8], stride: Option<usize>| {
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        let views = j["bufferViews"].as_array_mut().unwrap();
+        let mut v = json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len()});
+        if let Some(stride) = stride {
+            v["byteStride"] = stride.into();
+        }
+        views.push(v);
+        bin.extend_from_slice(bytes);
+        views.len() - 1
+    };
+    let image_view = view(&mut bin, EMBEDDED_IMAGE, None);
+    let n = rig.mesh.vertex_count();
+    let colours: Vec<u8> = (0..n).flat_map(|v| [v as u8, (3 * v) as u8, 7, 0]).collect();
+    let colour_view = view(&mut bin, &colours[..4 * n - 1], Some(4));
+    let visor: Vec<u8> = [[0.0f32, 1.5, 0.3], [0.1, 1.5, 0.3], [0.0, 1.6, 0.3]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let visor_view = view(&mut bin, &visor, None);
+    // A second influence set of zeros, as exporters write for 8 influences: the output
+    // needs one set, so two freed accessor slots are left over.
+    let zeros_view = view(&mut bin, &vec![0; 16 * n], None);
+    let accessors = j["accessors"].as_array_mut().unwrap();
+    accessors.push(json!({"bufferView": colour_view, "componentType": 5121, "normalized": true, "count": n, "type": "VEC3"}));
+    accessors.push(json!({"bufferView": visor_view, "componentType": 5126, "count": 3, "type": "VEC3",
+        "min": [0.0, 1.5, 0.3], "max": [0.1, 1.6, 0.3], "name": "visor positions"}));
+    accessors.push(json!({"bufferView": zeros_view, "componentType": 5123, "count": n, "type": "VEC4"}));
+    accessors.push(json!({"bufferView": zeros_view, "componentType": 5126, "count": n, "type": "VEC4"}));
+    let (colour, visor) = (accessors.len() - 4, accessors.len() - 3);
+    let (joints_1, weights_1) = (accessors.len() - 2, accessors.len() - 1);
+    j["buffers"][0]["byteLength"] = bin.len().into();
+    let primitive = &mut j["meshes"][0]["primitives"][0];
+    primitive["attributes"]["COLOR_0"] = colour.into();
+    primitive["attributes"]["JOINTS_1"] = joints_1.into();
+    primitive["attributes"]["WEIGHTS_1"] = weights_1.into();
+    primitive["material"] = 0.into();
+    primitive["extras"] = json!({"note": "kept"});
+    j["meshes"][0]["extras"] = json!({"targetNames": []});
+    j["meshes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({"name": "visor", "primitives": [{"attributes": {"POSITION": visor}, "material": 1}]}));
+    let nodes = j["nodes"].as_array_mut().unwrap();
+    nodes[1]["children"] = json!([3]);
+    nodes[0]["extras"] = json!({"bone": "upper"});
+    nodes.push(json!({"name": "visor", "mesh": 1, "translation": [0.0, 0.5, 0.0]}));
+    nodes.push(json!({"name": "eye", "camera": 0, "extensions": {"KHR_lights_punctual": {"light": 0}}}));
+    j["scenes"][0]["nodes"].as_array_mut().unwrap().push(4.into());
+    j["scenes"][0]["name"] = "avatar".into();
+    j["scenes"][0]["extras"] = json!({"lod": 0});
+    j["skins"][0]["extras"] = json!({"rig": "limb"});
+    j["animations"][0]["extras"] = json!({"loop": true});
+    j["materials"] = json!([
+        {"name": "skin", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}, "extras": {"shader": "toon"},
+         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 2.0}}},
+        {"name": "visor", "pbrMetallicRoughness": {"baseColorTexture": {"index": 1}, "metallicFactor": 0.5}}
+    ]);
+    j["textures"] = json!([{"sampler": 0, "source": 0}, {"sampler": 0, "source": 1, "name": "external"}]);
+    j["samplers"] = json!([{"magFilter": 9729, "minFilter": 9987, "wrapS": 33648}]);
+    j["images"] = json!([
+        {"bufferView": image_view, "mimeType": "image/png", "name": "embedded"},
+        {"uri": "tex/skin.png", "name": "beside"}
+    ]);
+    j["cameras"] = json!([{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.01}}]);
+    j["extensions"] = json!({
+        "KHR_lights_punctual": {"lights": [{"type": "point", "intensity": 3.0}]},
+        "VRM": {"meta": {"title": "limb", "texture": 1}, "blendShapeMaster": {"blendShapeGroups": [{"name": "A", "binds": []}]}},
+        "VRMC_vrm": {"specVersion": "1.0", "meta": {"name": "limb", "licenseUrl": "https://example.org"}}
+    });
+    j["extensionsUsed"] =
+        json!(["KHR_lights_punctual", "KHR_materials_emissive_strength", "VRM", "VRMC_vrm"]);
+    j["extras"] = json!({"author": "desal tests", "list": [1, 2, 3]});
+    j["asset"]["copyright"] = "CC0".into();
+    let json = serde_json::to_vec(&j).unwrap();
+    gltf::binary::Glb { header: parsed.header, json: json.into(), bin: Some(bin.into()) }.to_vec().unwrap()
+}
+
+const EMBEDDED_IMAGE: &[u8] = b"\x89PNG\r\n\x1a\n embedded, 31 bytes";
+const EXTERNAL_IMAGE: &[u8] = b"\x89PNG\r\n\x1a\n beside the file";
+
+/// The JSON and binary chunk of a `.glb`.
+fn json_and_bin(glb: &[u8]) -> (serde_json::Value, Vec<u8>) {
+    let glb = gltf::binary::Glb::from_slice(glb).unwrap();
+    (serde_json::from_slice(&glb.json).unwrap(), glb.bin.unwrap().into_owned())
+}
+
+/// The bytes of buffer view `v`.
+fn view_bytes<'a>(json: &serde_json::Value, bin: &'a [u8], v: &serde_json::Value) -> &'a [u8] {
+    let view = &json["bufferViews"][v.as_u64().unwrap() as usize];
+    let offset = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+    &bin[offset..offset + view["byteLength"].as_u64().unwrap() as usize]
+}
+
+/// Issue 42, item 1: the simplified document is the input's with the simplified
+/// primitive's accessors, the buffer views and the buffer changed, and nothing else.
+#[test]
+fn issue_42_the_simplified_document_changes_only_the_simplified_primitive() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = avatar_document(dir.path());
+    let path = dir.path().join("avatar.vrm");
+    let (rig, source) = desal_rig::read_rig_and_document(&path, &bytes, &ReadOptions::default()).unwrap();
+    assert_eq!(source.output_extension(), "vrm", "a .vrm comes back as a .vrm");
+    let (posed, mesh, simp_to_welded) = simplify_limb(&rig, desal_simplify::Placement::Subset, 60, true);
+    let input = SimplifiedInput {
+        positions: &mesh.positions,
+        faces: &mesh.faces,
+        simp_to_welded: &simp_to_welded,
+        subset: true,
+    };
+    let targets = PoseTargets { joints: &posed.joints, positions: &posed.poses.poses };
+    let (out, _) = simplified_rig(&rig, &posed.weld, &input, &targets).unwrap();
+    let edited = desal_rig::write_edited(&source, &rig, &out).unwrap();
+
+    let (before, before_bin) = json_and_bin(&bytes);
+    let (after, after_bin) = json_and_bin(&edited.bytes);
+    let keys = |j: &serde_json::Value| j.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
+    assert_eq!(keys(&after), keys(&before));
+    for key in keys(&before) {
+        if !["accessors", "bufferViews", "buffers", "meshes", "images"].contains(&key.as_str()) {
+            assert_eq!(after[&key], before[&key], "{key}");
+        }
+    }
+    // Meshes: equal but for the simplified primitives' accessor numbers (the limb's and
+    // the rigid visor's).
+    let strip = |j: &serde_json::Value| {
+        let mut meshes = j["meshes"].clone();
+        let primitive = meshes[0]["primitives"][0].as_object_mut().unwrap();
+        let names = keys(&primitive["attributes"]);
+        primitive.remove("attributes");
+        primitive.remove("indices");
+        let visor = meshes[1]["primitives"][0].as_object_mut().unwrap();
+        assert_eq!(keys(&visor["attributes"]), ["POSITION"], "the rigid visor stays rigid");
+        visor.remove("attributes");
+        visor.remove("indices");
+        (meshes, names)
+    };
+    let (after_meshes, after_names) = strip(&after);
+    let (before_meshes, mut before_names) = strip(&before);
+    assert_eq!(after_meshes, before_meshes);
+    before_names.retain(|n| !n.ends_with("_1"));
+    assert_eq!(after_names, before_names, "one influence set is enough");
+    // No accessor moved: of the two slots JOINTS_1 and WEIGHTS_1 freed, the visor's new
+    // indices (it had none) take one, and the other holds one zero.
+    assert_eq!(after["accessors"].as_array().unwrap().len(), before["accessors"].as_array().unwrap().len());
+    let leftovers: Vec<&serde_json::Value> =
+        after["accessors"].as_array().unwrap().iter().filter(|a| a["count"] == 1).collect();
+    assert_eq!(leftovers.len(), 1, "{leftovers:?}");
+    for a in leftovers {
+        assert_eq!(view_bytes(&after, &after_bin, &a["bufferView"]), [0; 4]);
+    }
+    // Images: equal, their view too, which holds the same bytes; the one beside the file
+    // comes back to be written beside the output.
+    assert_eq!(after["images"], before["images"]);
+    assert_eq!(view_bytes(&after, &after_bin, &after["images"][0]["bufferView"]), EMBEDDED_IMAGE);
+    assert_eq!(
+        edited.images,
+        [desal_rig::ExternalImage { path: "tex/skin.png".into(), bytes: EXTERNAL_IMAGE.to_vec() }]
+    );
+    // Every accessor a skin or an animation names is where it was, on the same view,
+    // holding the same values.
+    let named = [
+        before["skins"][0]["inverseBindMatrices"].clone(),
+        before["animations"][0]["samplers"][0]["input"].clone(),
+        before["animations"][0]["samplers"][0]["output"].clone(),
+    ];
+    for a in named {
+        let i = a.as_u64().unwrap() as usize;
+        assert_eq!(after["accessors"][i], before["accessors"][i], "accessor {i}");
+        let view = &after["accessors"][i]["bufferView"];
+        assert_eq!(
+            view_bytes(&after, &after_bin, view),
+            view_bytes(&before, &before_bin, view),
+            "accessor {i}"
+        );
+    }
+    assert_eq!(after["buffers"], serde_json::json!([{"byteLength": after_bin.len()}]));
+    // The visor, a mesh without a skin on the lower joint's node, is read as rigidly
+    // skinned to that joint, its vertices in the bind space (its node 0.5 above the joint,
+    // the joint 1 above the origin where its inverse bind matrix puts it), and written
+    // back in its own space: its three vertices kept, their positions exactly the input's.
+    let visor = &rig.meshes[1];
+    assert_eq!((visor.name.as_str(), visor.skin, visor.joints.as_slice()), ("visor", None, &[1u16][..]));
+    assert_eq!(rig.mesh.positions[visor.vertices.start as usize], [0.0, 1.5 + 1.5, 0.3]);
+    assert!(rig.mesh.influences.of(visor.vertices.start as usize).eq([(1, 1.0)]));
+    // Posed by skinning, it lands where the node tree carries it: the lower joint bent
+    // 90° about z takes the visor's first vertex (0, 1.5, 0.3) in its own space to
+    // (-2, 1, 0.3).
+    let locals = animated_locals(&rig, &rig.animations[0], 1.0);
+    let world = desal_rig::pose::world_matrices(&rig, &locals);
+    let bind: Vec<Vec3> =
+        rig.mesh.positions.iter().map(|p| Vec3::new(p[0].into(), p[1].into(), p[2].into())).collect();
+    let skinned = skin_points(&bind, &rig.mesh.influences, &joint_matrices(&rig, &locals));
+    let carried =
+        desal_rig::pose::transform_point(&world[visor.node], &Vec3::new(0.0, 1.5, f64::from(0.3_f32)));
+    let first = skinned[visor.vertices.start as usize];
+    assert!(
+        (first - carried).norm() < 1e-6 && (first - Vec3::new(-2.0, 1.0, 0.3)).norm() < 1e-6,
+        "{first:?}"
+    );
+    let position = |j: &serde_json::Value, bin: &[u8]| {
+        let a = &j["accessors"]
+            [j["meshes"][1]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap() as usize];
+        (a["min"].clone(), a["max"].clone(), view_bytes(j, bin, &a["bufferView"]).to_vec())
+    };
+    assert_eq!(position(&after, &after_bin), position(&before, &before_bin));
+    // The simplified primitive reads back as the simplified mesh, and its COLOR_0 (3-byte
+    // elements, strided to 4) holds each vertex's source colour.
+    let back =
+        read_rig_from(&dir.path().join("simplified.vrm"), &edited.bytes, &ReadOptions::default()).unwrap();
+    assert_eq!(without_provenance(back.clone()).mesh, without_provenance(out.clone()).mesh);
+    let colour = &after["accessors"]
+        [after["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"].as_u64().unwrap() as usize];
+    assert_eq!((colour["componentType"].as_u64(), colour["normalized"].as_bool()), (Some(5121), Some(true)));
+    let colours = view_bytes(&after, &after_bin, &colour["bufferView"]);
+    assert_eq!(after["bufferViews"][colour["bufferView"].as_u64().unwrap() as usize]["byteStride"], 4);
+    let limb = out.mesh.primitives[0].vertices.clone();
+    assert_eq!(colour["count"], limb.len());
+    for (v, &source) in out.mesh.sources[limb.start as usize..limb.end as usize].iter().enumerate() {
+        let s = source as usize;
+        assert_eq!(colours[4 * v..4 * v + 3], [s as u8, (3 * s) as u8, 7], "vertex {v}");
+    }
+    assert!(out.mesh.vertex_count() < rig.mesh.vertex_count());
+}
+
+/// Issue 42, item 5: capping a kept vertex's influences keeps the joints that skin it
+/// best, not the largest weights. Three joints weigh 0.4, 0.35 and 0.25; the first two
+/// never move apart and the third slides, so the two largest (renormalised) miss the
+/// slide in every pose, while the lightest joint with the first two's weight together
+/// follows it exactly.
+#[test]
+fn issue_42_capped_influences_keep_the_joints_that_skin_best() {
+    let mut influences = Influences::new();
+    for _ in 0..3 {
+        influences.push_row([(0, 0.4), (1, 0.35), (2, 0.25)]);
+    }
+    let mesh = SkinnedMesh {
+        name: "tri".into(),
+        positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        normals: None,
+        uvs: None,
+        influences,
+        triangles: vec![[0, 1, 2]],
+        primitives: Vec::new(),
+        sources: Vec::new(),
+    };
+    let weld = desal_rig::Weld::new(&mesh);
+    let x: Vec<Vec3> =
+        mesh.positions.iter().map(|p| Vec3::new(p[0].into(), p[1].into(), p[2].into())).collect();
+    let joints: Vec<Vec<desal_mesh::math::Mat4>> = (0..4)
+        .map(|k| {
+            let slide = desal_mesh::math::Mat4::new_translation(&Vec3::new(f64::from(k), 0.0, 0.0));
+            vec![desal_mesh::math::Mat4::identity(), desal_mesh::math::Mat4::identity(), slide]
+        })
+        .collect();
+    let positions: Vec<Vec<Vec3>> = (0..4).map(|k| skin_points(&x, &mesh.influences, &joints[k])).collect();
+    let input =
+        SimplifiedInput { positions: &x, faces: &[[0, 1, 2]], simp_to_welded: &[0, 1, 2], subset: true };
+    let targets = PoseTargets { joints: &joints, positions: &positions };
+    let options = desal_rig::WeightOptions { max_influences: Some(2) };
+    let (rows, _) = desal_rig::simplified_influences(&mesh, &weld, &input, &targets, &options);
+    for row in rows {
+        assert_eq!(row.len(), 2, "{row:?}");
+        let slide = row.iter().find(|w| w.0 == 2).expect("the sliding joint is kept");
+        assert!((slide.1 - 0.25).abs() < 1e-5, "{row:?}");
+        assert!((row.iter().map(|w| w.1).sum::<f32>() - 1.0).abs() < 1e-6);
+    }
+    // Uncapped, the weights are the exact ones.
+    let (rows, _) = desal_rig::simplified_influences(&mesh, &weld, &input, &targets, &Default::default());
+    assert_eq!(rows[0], [(0, 0.4), (1, 0.35), (2, 0.25)]);
 }

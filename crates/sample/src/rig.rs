@@ -170,6 +170,7 @@ pub fn build_rig(inputs: &RigInputs) -> Result<Rig, SampleError> {
         scenes: vec![vec![root, mesh_node]],
         scene: Some(0),
         mesh_node,
+        meshes: Vec::new(),
         skin: Skin {
             name: Some("cmu_mb".into()),
             joints: (0..bones.len()).collect(),
@@ -184,6 +185,8 @@ pub fn build_rig(inputs: &RigInputs) -> Result<Rig, SampleError> {
             uvs: Some(uvs),
             influences,
             triangles,
+            primitives: Vec::new(),
+            sources: Vec::new(),
         },
     })
 }

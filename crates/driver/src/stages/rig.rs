@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use desal_io::ContentHash;
 use desal_io::artifact::{ArtifactKind, LabelsV1, MapV1, PoseSetV2, Producer, SimplifiedV1};
-use desal_rig::{FrameConfig, PoseSource, PosedRig, ReadOptions, Rig};
+use desal_rig::{EditedGlb, FrameConfig, PoseSource, PosedRig, ReadOptions, Rig, SourceDocument};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
@@ -50,7 +50,8 @@ pub enum RigParts {
 pub struct RigParams {
     /// The `.glb` or `.gltf` file (relative to the pipeline file).
     pub file: String,
-    /// Which skinned mesh, by mesh or node name, when the file has several.
+    /// One skinned mesh, by mesh or node name; unset: every skinned mesh of the file (a
+    /// mesh carried by several nodes once), simplified together.
     #[serde(default)]
     pub mesh: Option<String>,
     /// Where the frames come from. Default `animations`.
@@ -71,14 +72,35 @@ pub struct RigParams {
     /// Fewest vertices a joint's part may have before it joins its parent. Default 50.
     #[serde(default = "default_min_part_vertices")]
     pub min_part_vertices: usize,
-    /// At most this many joint influences per vertex of `simplified.glb` (e.g. 4 for an
-    /// engine that skins `JOINTS_0` only): subset placement keeps each vertex's largest
-    /// weights, renormalised; the refit fits at most this many. Unset: subset placement
-    /// keeps the exact weights, the refit at most 4. Left out of the ingest key's
-    /// parameters when unset, so that caches made before it existed still match.
+    /// At most this many joint influences per vertex of `simplified.glb`, or `"all"`.
+    /// Default 4 ([`DEFAULT_MAX_INFLUENCES`]: one `JOINTS_0` set, what Unity, three.js and
+    /// most engines skin). Subset placement gives a vertex with more the ones of its own
+    /// joints that skin it closest over the poses, renormalised; the refit fits at most
+    /// this many. `"all"`: subset placement keeps the exact weights, the refit at most 4.
+    /// Left out of the ingest key's parameters when unset, so that caches made before it
+    /// existed still match (it shapes the output only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub max_influences: Option<usize>,
+    pub max_influences: Option<MaxInfluences>,
 }
+
+/// `max_influences = N | "all"`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(untagged)]
+pub enum MaxInfluences {
+    Count(usize),
+    All(AllInfluences),
+}
+
+/// The word `"all"` of [`MaxInfluences`].
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum AllInfluences {
+    All,
+}
+
+/// Influences per vertex of the simplified rig when `max_influences` is unset (issue 42,
+/// item 5): engines skin 4.
+pub const DEFAULT_MAX_INFLUENCES: usize = 4;
 
 fn default_frames() -> usize {
     FrameConfig::default().frames
@@ -117,10 +139,15 @@ impl RigParams {
 
     /// The weight settings of the simplified rig, validated.
     pub fn weight_options(&self) -> Result<desal_rig::WeightOptions> {
-        if self.max_influences == Some(0) {
-            bail!("rig.max_influences must be at least 1 (a vertex needs a joint to follow)");
-        }
-        Ok(desal_rig::WeightOptions { max_influences: self.max_influences })
+        let max_influences = match self.max_influences {
+            None => Some(DEFAULT_MAX_INFLUENCES),
+            Some(MaxInfluences::Count(0)) => {
+                bail!("rig.max_influences must be at least 1 (a vertex needs a joint to follow), or \"all\"")
+            }
+            Some(MaxInfluences::Count(n)) => Some(n),
+            Some(MaxInfluences::All(_)) => None,
+        };
+        Ok(desal_rig::WeightOptions { max_influences })
     }
 
     pub fn parts_config(&self) -> Result<desal_rig::PartsConfig> {
@@ -196,6 +223,17 @@ impl RigInput<'_> {
 
     pub fn hints(&self) -> Vec<(String, String)> {
         vec![("rig".into(), crate::stages::ingest::file_name(self.file))]
+    }
+
+    /// Reads the rig, keeping its whole document, and poses it at its frames: what the
+    /// simplified rig is written from.
+    pub fn load_with_document(&self) -> Result<(Rig, SourceDocument, PosedRig)> {
+        let options = ReadOptions { mesh: self.params.mesh.clone() };
+        let bytes = desal_io::file::read_regular_file(self.file)?;
+        let (rig, document) = desal_rig::read_rig_and_document(self.file, &bytes, &options)?;
+        let frames = desal_rig::sample_frames(&rig, &self.params.frame_config()?, self.file)?;
+        let posed = desal_rig::pose_rig(&rig, &frames).with_context(|| format!("{}", self.file.display()))?;
+        Ok((rig, document, posed))
     }
 
     /// Reads the rig and poses it at its frames.
@@ -302,26 +340,75 @@ pub struct SimplifiedRigSummary {
     pub cross_chart_faces: usize,
     pub refitted_vertices: usize,
     pub max_influences: usize,
+    /// Each glTF mesh simplified, in node order: where its vertices are in the pose set
+    /// (`poses.dsa`), the simplified pose set (`simplified/*.ply`, `vertex_map.txt`) and
+    /// the written mesh, as `[first, end)` ranges.
+    pub meshes: Vec<MeshRanges>,
 }
 
-/// The simplified rig's bytes: the input's skeleton, inverse bind matrices and animations
-/// with the simplified mesh (subset placement: exact weights; optimal: refitted).
+/// One row of [`SimplifiedRigSummary::meshes`].
+#[derive(Debug, Clone, Serialize)]
+pub struct MeshRanges {
+    pub name: String,
+    pub node: usize,
+    /// Welded vertices of the pose set.
+    pub pose_set_vertices: [u32; 2],
+    /// Vertices of the simplified pose set: stage 3 keeps each mesh's vertices apart and
+    /// in order, so they follow one another.
+    pub simplified_vertices: [u32; 2],
+    /// Vertices of its primitives in the written rig (seam copies included).
+    pub output_vertices: [u32; 2],
+}
+
+/// Each simplified mesh's vertex ranges: the pose set's from the weld, the simplified
+/// pose set's through stage 4's map, the output's from the simplified rig.
+fn mesh_ranges(input: &Rig, weld: &desal_rig::Weld, map: &MapV1, out: &Rig) -> Vec<MeshRanges> {
+    let welded_end =
+        |split_end: u32| (split_end as usize).checked_sub(1).map_or(0, |last| weld.split_to_welded[last] + 1);
+    let mut simplified_start = 0u32;
+    input
+        .meshes
+        .iter()
+        .zip(&out.meshes)
+        .map(|(part, written)| {
+            let welded = [welded_end(part.vertices.start), welded_end(part.vertices.end)];
+            let count =
+                map.simp_to_orig.iter().filter(|&&w| (welded[0]..welded[1]).contains(&w)).count() as u32;
+            let simplified = [simplified_start, simplified_start + count];
+            simplified_start += count;
+            MeshRanges {
+                name: part.name.clone(),
+                node: part.node,
+                pose_set_vertices: welded,
+                simplified_vertices: simplified,
+                output_vertices: [written.vertices.start, written.vertices.end],
+            }
+        })
+        .collect()
+}
+
+/// The simplified rig: the input document with the simplified mesh's primitives in place
+/// of its own (subset placement: exact weights; optimal: refitted), everything else the
+/// input's (`desal_rig::edit`), and the external images it names.
 pub fn simplified_glb(
     source: &RigSource,
     simplified: &SimplifiedV1,
     map: &MapV1,
-) -> Result<(Vec<u8>, SimplifiedRigSummary)> {
+) -> Result<(EditedGlb, SimplifiedRigSummary)> {
     let input = RigInput { file: &source.file, params: &source.params };
     let options = source.params.weight_options()?;
-    let (rig, posed) = input.load()?;
+    let (rig, document, posed) = input.load_with_document()?;
     let (out, report) = simplified_rig(&rig, &posed, simplified, map, &options)?;
-    let bytes = desal_rig::write_glb(&out)?;
+    let edited = desal_rig::write_edited(&document, &rig, &out)?;
     let subset = simplified.simp_to_orig.iter().all(Option::is_some);
     let summary = SimplifiedRigSummary {
         placement: simplified.placement.clone(),
         weights: match (subset, options.max_influences) {
             (true, None) => "exact (subset placement)",
-            (true, Some(_)) => "exact, capped at max_influences and renormalised (subset placement)",
+            (true, Some(_)) => {
+                "exact, capped at max_influences: of a vertex with more, the ones of its own joints that skin it \
+                 closest over the poses (subset placement)"
+            }
             (false, _) => "least-squares refit over the pose set",
         },
         simplified_vertices: report.simplified_vertices,
@@ -331,8 +418,30 @@ pub fn simplified_glb(
         cross_chart_faces: report.cross_chart_faces,
         refitted_vertices: report.refitted_vertices,
         max_influences: report.max_influences,
+        meshes: mesh_ranges(&rig, &posed.weld, map, &out),
     };
-    Ok((bytes, summary))
+    Ok((edited, summary))
+}
+
+/// The simplified rig's file name: `simplified.vrm` for a `.vrm` avatar, else
+/// `simplified.glb`.
+pub fn simplified_file_name(source: &RigSource) -> &'static str {
+    let vrm = source.file.extension().is_some_and(|e| e.eq_ignore_ascii_case("vrm"));
+    if vrm { "simplified.vrm" } else { "simplified.glb" }
+}
+
+/// The images a simplified rig written to `glb` names by URI, under the same relative
+/// paths beside it (`desal_rig::ExternalImage::path` holds plain names only).
+pub fn write_images_beside(glb: &Path, images: &[desal_rig::ExternalImage]) -> Result<()> {
+    let folder = glb.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    for image in images {
+        let to = folder.join(&image.path);
+        if let Some(parent) = to.parent() {
+            std::fs::create_dir_all(parent).with_context(|| format!("creating {}", parent.display()))?;
+        }
+        desal_io::write_atomic(&to, &image.bytes)?;
+    }
+    Ok(())
 }
 
 /// The simplified rig of a posed rig, stage 3's mesh and stage 4's map.
@@ -380,7 +489,7 @@ mod tests {
             RigParams { frames: 61, ..base.clone() },
             RigParams { seed: 1, ..base.clone() },
             RigParams { max_degrees: 31.0, ..base.clone() },
-            RigParams { max_influences: Some(4), ..base.clone() },
+            RigParams { max_influences: Some(MaxInfluences::Count(4)), ..base.clone() },
         ];
         for v in &variants {
             assert_ne!(key(&a, v), reference, "{v:?}");
@@ -402,8 +511,17 @@ mod tests {
         assert!(RigParams { frames: 0, ..p.clone() }.frame_config().is_err());
         assert!(RigParams { max_degrees: 200.0, ..p.clone() }.frame_config().is_err());
         assert!(RigParams { min_part_vertices: 2, ..p.clone() }.parts_config().is_err());
-        assert!(RigParams { max_influences: Some(0), ..p.clone() }.weight_options().is_err());
-        assert_eq!(p.weight_options().unwrap().max_influences, None);
+        assert!(
+            RigParams { max_influences: Some(MaxInfluences::Count(0)), ..p.clone() }
+                .weight_options()
+                .is_err()
+        );
+        assert_eq!(p.weight_options().unwrap().max_influences, Some(4), "engines skin 4");
+        let all: RigParams = toml::from_str("file = \"a.glb\"\nmax_influences = \"all\"").unwrap();
+        assert_eq!(all.weight_options().unwrap().max_influences, None);
+        let eight: RigParams = toml::from_str("file = \"a.glb\"\nmax_influences = 8").unwrap();
+        assert_eq!(eight.weight_options().unwrap().max_influences, Some(8));
+        assert!(toml::from_str::<RigParams>("file = \"a.glb\"\nmax_influences = \"some\"").is_err());
         let both: RigParams = toml::from_str("file = \"a.glb\"\nposes = \"both\"").unwrap();
         assert_eq!(both.poses, PosesFrom::Both);
         assert!(toml::from_str::<RigParams>("file = \"a.glb\"\nposes = \"all\"").is_err());

@@ -320,7 +320,7 @@ def simplify_rig(
     seed: Optional[int] = None,
     max_degrees: Optional[float] = None,
     min_part_vertices: Optional[int] = None,
-    max_influences: Optional[int] = None,
+    max_influences: Union[int, str, None] = None,
     fit_method: str = "rigid",
     saliency_options: Optional[dict] = None,
     simplify_options: Optional[dict] = None,
@@ -332,12 +332,15 @@ def simplify_rig(
 
     The rig is posed by linear blend skinning at ``frames`` frames of its animations
     (``poses="animations"``), of seeded random joint turns (``"random"``) or both; its
-    UV/normal seams are welded for simplification and kept in the output. ``mesh``
-    picks the skinned mesh when the file has several. The output has the input's
-    skeleton, inverse bind matrices and animations; with ``placement="subset"`` every
+    UV/normal seams are welded for simplification and kept in the output. Every skinned
+    mesh is simplified, together; ``mesh`` picks one. The output is the input document
+    with only the simplified primitives changed (every other mesh, material, texture,
+    animation, morph target and extension kept; images the file names by a relative path
+    are written beside ``out``); with ``placement="subset"`` every
     kept vertex keeps its exact weights, with ``"optimal"`` at most 4 weights are
-    refitted over the poses; ``max_influences`` caps both (e.g. 4 for an engine that skins
-    ``JOINTS_0`` only: a subset vertex keeps its largest weights, renormalised). ``method`` is as for :func:`simplify_pose_set`. Returns the
+    refitted over the poses; ``max_influences`` caps both (default 4, what engines skin: a
+    subset vertex with more keeps the ones of its own joints that skin it closest over the
+    poses; ``"all"`` keeps every exact weight). ``method`` is as for :func:`simplify_pose_set`. Returns the
     report (``rig``: the output's vertex, face and seam counts; ``ingest``, ``labels``,
     ``fit``, ``saliency``, ``simplify``, ``map``: each stage's). A rig that cannot be
     read or posed raises :class:`InputError` naming the file and the element, as does
