@@ -163,6 +163,18 @@ impl SparseRows {
         self.cols[range.clone()].iter().map(|&c| c as usize).zip(self.values[range].iter().copied())
     }
 
+    /// The rows as a dense row-major `rows × cols` matrix (the inverse of
+    /// [`SparseRows::from_dense`]).
+    pub fn to_dense(&self, rows: usize, cols: usize) -> Vec<f64> {
+        let mut out = vec![0.0; rows * cols];
+        for r in 0..rows {
+            for (c, x) in self.row(r) {
+                out[r * cols + c] = x;
+            }
+        }
+        out
+    }
+
     /// The nonzeros of a dense row-major `rows × cols` matrix.
     pub fn from_dense(dense: &[f64], rows: usize, cols: usize) -> Self {
         debug_assert_eq!(dense.len(), rows * cols);

@@ -455,7 +455,7 @@ pub(crate) fn pickled_array(value: &PyValue) -> Result<AnyArray, String> {
                 Matrix::Dense(a) => Ok(a),
                 Matrix::Csc { shape, data, indices, indptr } => {
                     let rows = csc_to_rows(&data, &indices, &indptr, shape)?;
-                    let dense = crate::write::dense(&rows, shape[0], shape[1]);
+                    let dense = rows.to_dense(shape[0], shape[1]);
                     Ok(AnyArray { shape: shape.to_vec(), data: AnyData::F64(dense) })
                 }
             }

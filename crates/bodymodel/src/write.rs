@@ -9,7 +9,7 @@
 use desal_io::npz::{AnyArray, AnyData, Dtype, NpzEntry, encode_npy_any, encode_npz_entries};
 
 use crate::error::BodyModelError;
-use crate::model::{BodyModel, ExtraEntry, SparseRows};
+use crate::model::{BodyModel, ExtraEntry};
 use crate::read::MODEL_KEYS;
 
 /// A model's npz bytes and the keys left out, each with why.
@@ -85,8 +85,8 @@ impl BodyModel {
                 typed(shape, &values, Dtype::F64)
             }
             "posedirs" => typed(vec![v, 3, self.pose_feature_count()], &self.posedirs, Dtype::F64),
-            "weights" => typed(vec![v, j], &dense(&self.weights, v, j), Dtype::F64),
-            "J_regressor" => typed(vec![j, v], &dense(&self.joint_regressor, j, v), Dtype::F64),
+            "weights" => typed(vec![v, j], &self.weights.to_dense(v, j), Dtype::F64),
+            "J_regressor" => typed(vec![j, v], &self.joint_regressor.to_dense(j, v), Dtype::F64),
             "kintree_table" => self.layout.kintree_table.clone().unwrap_or_else(|| {
                 let parents = self.parents.iter().map(|p| p.map_or(-1, |p| p as i64));
                 AnyArray { shape: vec![2, j], data: AnyData::I64(parents.chain(0..j as i64).collect()) }
@@ -98,15 +98,4 @@ impl BodyModel {
 
 fn encode(key: &str, array: &AnyArray) -> Result<Vec<u8>, BodyModelError> {
     encode_npy_any(array).map_err(|e| BodyModelError::Write { reason: format!("'{key}': {e}") })
-}
-
-/// Sparse rows as a dense row-major `rows × cols` matrix.
-pub(crate) fn dense(m: &SparseRows, rows: usize, cols: usize) -> Vec<f64> {
-    let mut out = vec![0.0; rows * cols];
-    for r in 0..rows {
-        for (c, x) in m.row(r) {
-            out[r * cols + c] = x;
-        }
-    }
-    out
 }

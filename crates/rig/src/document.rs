@@ -27,6 +27,12 @@ use serde_json::Value;
 
 use crate::RigError;
 
+/// The most bytes a file's buffers may hold together (the GLB chunk, `data:` URIs and
+/// files beside it): 2 GiB, far above any avatar, and checked as each buffer is read, so
+/// a small glTF naming one file thousands of times is refused instead of reading it each
+/// time.
+pub const MAX_BUFFER_BYTES: u64 = 1 << 31;
+
 /// Extensions that desal implements, so a file may require them.
 pub const HANDLED_EXTENSIONS: &[&str] = &["KHR_mesh_quantization"];
 

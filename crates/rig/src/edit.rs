@@ -107,7 +107,7 @@ pub struct ExternalImage {
 /// `source` edited: see the module doc for what changes. Input primitives the simplified
 /// mesh has no faces for are kept as they were.
 pub fn write_edited(source: &SourceDocument, input: &Rig, simplified: &Rig) -> Result<EditedGlb, RigError> {
-    crate::read::without_panics(&source.path, || Editor { source, input, simplified }.write())
+    crate::error::without_panics(&source.path, || Editor { source, input, simplified }.write())
 }
 
 /// One accessor to add: its JSON without `bufferView`, its packed bytes, its view target.
@@ -571,8 +571,12 @@ impl Editor<'_> {
                      the input's folder"
                 ),
             })?;
-            let bytes =
-                desal_io::confine::read_inside(&self.source.path, &what, uri, crate::read::MAX_BUFFER_BYTES)?;
+            let bytes = desal_io::confine::read_inside(
+                &self.source.path,
+                &what,
+                uri,
+                crate::document::MAX_BUFFER_BYTES,
+            )?;
             out.push(ExternalImage { path, bytes });
         }
         Ok(out)

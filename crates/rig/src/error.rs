@@ -1,7 +1,7 @@
 //! The one error type of `desal-rig`. Every variant names the file and the glTF element
 //! (mesh, primitive, accessor, vertex, joint) at fault, and says how to fix it.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Why a rig could not be read, posed or written.
 #[derive(Debug, thiserror::Error)]
@@ -82,4 +82,19 @@ pub enum RigError {
         "offline view.html: {problem}; it inlines npm three {version} from {dir}: run `npm install three@{version}` and give its node_modules/three folder"
     )]
     Three { dir: PathBuf, version: String, problem: String },
+}
+
+/// `read()`, with a panic turned into [`RigError::Panic`] naming `path`.
+pub(crate) fn without_panics<T>(
+    path: &Path,
+    read: impl FnOnce() -> Result<T, RigError>,
+) -> Result<T, RigError> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(read)).unwrap_or_else(|panic| {
+        let message = panic
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_owned())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".into());
+        Err(RigError::Panic { path: path.to_owned(), message })
+    })
 }

@@ -32,6 +32,7 @@ use gltf::Document;
 use crate::RigError;
 use crate::accessor::{Accessors, Semantic};
 use crate::edit::SourceDocument;
+use crate::error::without_panics;
 use crate::model::{
     Animation, Channel, Influences, Interpolation, LocalTransform, MeshPart, Node, Path as ChannelPath,
     PrimitiveSpan, Rig, Skin, SkinnedMesh, WEIGHT_SUM_REPORTED, WeightSums,
@@ -48,11 +49,7 @@ pub const WEIGHT_SUM_TOLERANCE: f64 = 1e-3;
 /// one this short has no direction to normalise to.
 pub const MIN_ROTATION_LENGTH: f64 = 1e-6;
 
-/// The most bytes a file's buffers may hold together (the GLB chunk, `data:` URIs and
-/// files beside it): 2 GiB, far above any avatar, and checked as each buffer is read, so
-/// a small glTF naming one file thousands of times is refused instead of reading it each
-/// time.
-pub const MAX_BUFFER_BYTES: u64 = 1 << 31;
+pub use crate::document::MAX_BUFFER_BYTES;
 
 /// The most keyframe values (times and output components, over every channel of every
 /// animation) a file may make desal decode: 2^26 `f32`s, 256 MiB. Counted from the
@@ -93,21 +90,6 @@ pub fn read_rig_and_document(
     // the checks let through, the caller gets an error naming the file, not an abort (and
     // Python no `PanicException`).
     without_panics(path, || read_checked(path, bytes, options))
-}
-
-/// `read()`, with a panic turned into [`RigError::Panic`] naming `path`.
-pub(crate) fn without_panics<T>(
-    path: &Path,
-    read: impl FnOnce() -> Result<T, RigError>,
-) -> Result<T, RigError> {
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(read)).unwrap_or_else(|panic| {
-        let message = panic
-            .downcast_ref::<&str>()
-            .map(|s| (*s).to_owned())
-            .or_else(|| panic.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "no message".into());
-        Err(RigError::Panic { path: path.to_owned(), message })
-    })
 }
 
 fn read_checked(path: &Path, bytes: &[u8], options: &ReadOptions) -> Result<(Rig, SourceDocument), RigError> {
