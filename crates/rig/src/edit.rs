@@ -636,14 +636,7 @@ fn place_accessors(json: &mut Value, freed: &BTreeSet<usize>, count: usize) -> V
 
 /// `POSITION` as `f32` triples with the bounds glTF requires.
 fn positions(points: &[[f32; 3]]) -> NewAccessor {
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for p in points {
-        for i in 0..3 {
-            lo[i] = lo[i].min(p[i]);
-            hi[i] = hi[i].max(p[i]);
-        }
-    }
+    let (lo, hi) = crate::write::bounds(points);
     let bytes = points.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
     let mut a = packed(bytes, points.len(), FLOAT, "VEC3", 12, Some(ARRAY_BUFFER));
     a.json.insert("min".into(), json!(lo));
