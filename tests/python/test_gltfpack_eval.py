@@ -78,8 +78,11 @@ def test_desal_s_best_skins_within_0_8_of_gltfpack_held_out(report):
     assert ratio <= 0.8, (best, ratio)
     versus = rows[best]["versus_baseline"]["held_out"]["vs_full"]
     assert versus["v2f_wins"] == len(report["evaluated_poses"]) and versus["v2f_p"] < 0.01
+    # Subset placement keeps each kept vertex's own joints, at most 4 by default (issue 42,
+    # item 5: fitted over the poses), so a vertex skins where the full rig puts it up to
+    # the cap's error: 6e-8 m² measured on the sample (0 with max_influences = "all").
     for subset in ("qslim-subset", "paper-subset", "multipose"):
-        assert held_out(subset)["v2v"]["mean"] < 1e-12, "exact weights skin exactly"
+        assert held_out(subset)["v2v"]["mean"] < 1e-6, "kept weights skin (nearly) exactly"
 
 
 def test_a_failing_gltfpack_is_a_clear_error(tmp_path):
