@@ -10,8 +10,11 @@ QSlim's:
   [2500, 625], the report's held-out figure (two folds by pose index);
 - `sample`: the bundled CC0 sample (11 poses), levels [2500, 625], likewise.
 
-Usage: python tests/bench/hierarchy_methods.py anny|scape|sample [METHOD ...]
-(default methods: qslim paper saliency balance multipose desal).
+Usage: python tests/bench/hierarchy_methods.py anny|scape|sample [METHOD ...] [KEY=VALUE ...]
+(default methods: qslim paper saliency balance multipose desal). KEY=VALUE pairs go to
+`desal.hierarchy` as upsampler options (`neighbours=32`, `ridge=0.001`,
+`neighbourhood=geodesic`). On ANNY the table also gives, per level, the fitted U's MSE
+over that of COMA's barycentric U on the same levels (issue 41's done-when ratio).
 """
 
 import glob
@@ -48,7 +51,13 @@ def read_poses(pattern, labels_file):
 
 def main():
     dataset = sys.argv[1]
-    methods = sys.argv[2:] or METHODS
+    options = dict(a.split("=", 1) for a in sys.argv[2:] if "=" in a)
+    for key in ("neighbours",):
+        if key in options:
+            options[key] = int(options[key])
+    if "ridge" in options:
+        options["ridge"] = float(options["ridge"])
+    methods = [a for a in sys.argv[2:] if "=" not in a] or METHODS
     unseen = None
     if dataset == "anny":
         from body_models.anny.numpy import ANNY
@@ -66,12 +75,14 @@ def main():
         levels = [2500, 625]
     else:
         sys.exit(f"unknown dataset {dataset!r}: anny, scape or sample")
-    rows = {}
+    rows, vs_barycentric = {}, {}
     for method in methods:
         start = time.time()
-        h = desal.hierarchy(ps, levels, method=method)
+        h = desal.hierarchy(ps, levels, method=method, **options)
         if unseen is not None:
             rows[method] = [composed_mse(h, k, unseen) for k in (1, 2)]
+            b = desal.hierarchy(ps, levels, method=method, upsampler="barycentric")
+            vs_barycentric[method] = [f / composed_mse(b, k, unseen) for k, f in zip((1, 2), rows[method])]
         else:
             rows[method] = [step["heldout_fitted"]["mse"] for step in h.report]
         print(f"{method}: {rows[method]} ({time.time() - start:.1f} s)", file=sys.stderr, flush=True)
@@ -82,6 +93,11 @@ def main():
     for method, (l1, l2) in rows.items():
         rel = ["" if base is None else f"{100 * (v / b - 1):+.1f} %" for v, b in zip((l1, l2), base or (1, 1))]
         print(f"| {method} | {l1:.3e} | {rel[0]} | {l2:.3e} | {rel[1]} |")
+    if vs_barycentric:
+        print(f"\n| method (anny{', ' + str(options) if options else ''}) | fitted / barycentric, level 1 | level 2 |")
+        print("|---|---|---|")
+        for method, (r1, r2) in vs_barycentric.items():
+            print(f"| {method} | {r1:.4f} | {r2:.4f} |")
 
 
 if __name__ == "__main__":

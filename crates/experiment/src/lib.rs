@@ -233,8 +233,7 @@ fn evaluate_dataset(
             }
         }
     }
-    let mut evaluated: Vec<usize> = folds.concat();
-    evaluated.sort_unstable();
+    let evaluated = desal_measures::tested_poses(&folds);
     // Checked now, so a bad --figure-poses fails before anything is computed.
     figure_poses(poses, &evaluated, &args.figure_poses)?;
 

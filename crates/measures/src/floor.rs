@@ -16,7 +16,7 @@ use desal_mesh::{PartLabels, PoseSet, Real, TriMesh, Vec3};
 use rayon::prelude::*;
 
 use crate::error::EvalError;
-use crate::folds::{pose_set_folds, training_poses};
+use crate::folds::{pose_set_folds, tested_poses, training_poses};
 use crate::metrics::{SurfaceIndex, VertexIndex, mean, v2f_halves_same_faces, vertex_faces};
 use crate::pose_model::{FittedModel, PoseModel};
 use crate::transform::PartTransform;
@@ -80,8 +80,7 @@ pub fn model_floor_indexed(
     }
     // Over whole groups when the poses have them (the template's group only trains).
     let test_folds = pose_set_folds(poses, k);
-    let mut evaluated: Vec<usize> = test_folds.concat();
-    evaluated.sort_unstable();
+    let evaluated = tested_poses(&test_folds);
     let all: Vec<usize> = (0..poses.pose_count()).collect();
     let in_sample = synthesise(poses, labels, transforms, model, &all, &evaluated)?;
     // The folds' fits are independent: in parallel, collected in fold order.

@@ -67,6 +67,14 @@ pub fn pose_set_folds(set: &PoseSet, k: usize) -> Vec<Vec<usize>> {
     }
 }
 
+/// Every pose some fold tests, ascending: the poses a held-out evaluation reports (all
+/// but the template, or with groups all but the template's group).
+pub fn tested_poses(folds: &[Vec<usize>]) -> Vec<usize> {
+    let mut tested = folds.concat();
+    tested.sort_unstable();
+    tested
+}
+
 /// The complement of `test` in `0..pose_count`, ascending: the training poses of a fold.
 pub fn training_poses(pose_count: usize, test: &[usize]) -> Vec<usize> {
     let mut is_test = vec![false; pose_count];

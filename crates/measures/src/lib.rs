@@ -47,7 +47,7 @@ pub const SOURCE: &str = env!("DESAL_EVAL_SOURCE");
 
 pub use error::EvalError;
 pub use floor::{MeanErrors, ModelFloor, model_floor, model_floor_indexed};
-pub use folds::{folds, group_folds, pose_set_folds, training_poses};
+pub use folds::{folds, group_folds, pose_set_folds, tested_poses, training_poses};
 pub use lbs::{LbsConfig, LbsModel, LbsReport, fit_lbs};
 pub use metrics::{
     SurfaceIndex, V2fHalves, VertexErrors, VertexIndex, v2f, v2f_halves, v2f_halves_both_indexed,

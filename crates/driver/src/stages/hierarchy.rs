@@ -450,8 +450,8 @@ pub fn compute_level(
 /// training: `desal_measures::group_folds`); without, [`HELDOUT_FOLDS`] folds by pose
 /// index.
 pub fn heldout_folds(full: &PoseSet) -> Vec<Vec<usize>> {
-    match &full.groups {
-        Some(groups) => desal_measures::group_folds(groups, full.template, GROUP_FOLDS),
+    match full.groups {
+        Some(_) => desal_measures::pose_set_folds(full, GROUP_FOLDS),
         None => (0..HELDOUT_FOLDS)
             .map(|f| (0..full.pose_count()).filter(|p| p % HELDOUT_FOLDS == f).collect())
             .collect(),
