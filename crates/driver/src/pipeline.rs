@@ -17,7 +17,7 @@ use crate::stages::model::{ModelInput, ModelParams};
 use crate::stages::parts::PartsParams;
 use crate::stages::rig::{RigInput, RigParams};
 use crate::stages::saliency::SaliencyParams;
-use crate::stages::simplify::{SimplifyParams, TARGET_KEYS};
+use crate::stages::simplify::{Objective, SimplifyParams, TARGET_KEYS};
 use crate::stages::{DatasetInputs, LabelsInput};
 
 /// The pipeline file schema this build reads.
@@ -226,6 +226,7 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
                 spec.name
             );
         }
+        default_objective(&mut spec);
         let in_dataset = || format!("{}: dataset '{}'", path.display(), spec.name);
         if spec.model.is_some() {
             crate::stages::model::use_subset_placement(&mut spec.simplify).with_context(in_dataset)?;
@@ -292,6 +293,26 @@ pub fn parse(path: &Path, text: &str, out_override: Option<&Path>) -> Result<Pip
         datasets.push(Dataset { spec, pose_files, labels, source_file, groups_file, out_dir });
     }
     Ok(Pipeline { path: path.to_owned(), out_root, datasets })
+}
+
+/// A dataset kind's default use (issue 43), when its `[simplify]` names no `method`, no
+/// `objective` and none of the settings a method sets: a rig is simplified for skinning,
+/// a pose set with a `[dataset.hierarchy]` for its upsampler; any other keeps the paper's
+/// stage 3 (its settings' defaults).
+fn default_objective(spec: &mut DatasetToml) {
+    let simplify = &mut spec.simplify;
+    if simplify.method.is_some() || simplify.objective.is_some() || !simplify.given.is_empty() {
+        return;
+    }
+    let objective = if spec.rig.is_some() {
+        Objective::Skinning
+    } else if spec.hierarchy.is_some() {
+        Objective::Hierarchy
+    } else {
+        return;
+    };
+    simplify.objective = Some(objective);
+    simplify.method = Some(objective.method());
 }
 
 /// The stage parameters that can be checked without reading a mesh: fit method,
@@ -420,6 +441,36 @@ fn resolve_poses(base: &Path, spec: &PosesSpec) -> Result<Vec<PathBuf>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A pose set with a hierarchy is simplified for it, a rig for skinning, unless its
+    /// `[simplify]` names a method, an objective or a setting a method makes; a plain
+    /// pose set keeps the paper's stage 3.
+    #[test]
+    fn a_dataset_kind_has_its_default_objective() {
+        use crate::stages::simplify::Method;
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("a.ply"), b"").unwrap();
+        let path = dir.path().join("p.toml");
+        let head = "schema = 1\n[[dataset]]\nname = 'a'\nposes = ['a.ply']\nlabels = 'l'\n";
+        let parse = |extra: &str| parse(&path, &format!("{head}{extra}"), None).unwrap().datasets.remove(0);
+        let levels = "[dataset.hierarchy]\nlevels = [10]\n";
+        let plain = parse("");
+        assert_eq!((plain.spec.simplify.objective, plain.spec.simplify.method), (None, None));
+        let hierarchy = parse(levels);
+        assert_eq!(hierarchy.spec.simplify.objective, Some(Objective::Hierarchy));
+        assert_eq!(hierarchy.spec.simplify.method, Some(Method::DesalHierarchy));
+        let given = parse(&format!("{levels}[dataset.simplify]\nbalance = true\n"));
+        assert_eq!((given.spec.simplify.objective, given.spec.simplify.method), (None, None));
+        let named = parse(&format!("{levels}[dataset.simplify]\nmethod = \"multipose\"\n"));
+        assert_eq!(
+            (named.spec.simplify.objective, named.spec.simplify.method),
+            (None, Some(Method::Multipose))
+        );
+        let rig = "schema = 1\n[[dataset]]\nname = 'r'\n[dataset.rig]\nfile = 'r.glb'\n";
+        let rig = super::parse(&path, rig, None).unwrap().datasets.remove(0);
+        assert_eq!(rig.spec.simplify.objective, Some(Objective::Skinning));
+        assert_eq!(rig.spec.simplify.method, Some(Method::Desal));
+    }
 
     #[test]
     fn defaults_merge_key_by_key_and_paths_resolve_against_the_file() {

@@ -24,6 +24,7 @@
 //! `desal run` replaces `<out>/<dataset>` whole when its own outputs change but carries
 //! the `eval/` folder over (`outputs::KEPT_SUBFOLDER`).
 
+pub mod every_measure;
 pub mod figures;
 pub mod floor;
 #[cfg(feature = "gltfpack")]
@@ -93,6 +94,11 @@ pub struct EvalArgs {
     /// qslim-optimal; gltfpack for a rig dataset that runs it).
     #[cfg_attr(feature = "cli", arg(long))]
     pub baseline: Option<String>,
+    /// Measures to leave out of the opening table, comma-separated: scape and lbs (the
+    /// models measured beside --model), upsampling, surface. Every measure is on by
+    /// default; eval.md names what was skipped.
+    #[cfg_attr(feature = "cli", arg(long, value_delimiter = ','))]
+    pub skip: Vec<String>,
     /// Skip the model's own floor (the model fitted and measured at full resolution).
     #[cfg_attr(feature = "cli", arg(long))]
     pub no_floor: bool,
@@ -151,6 +157,9 @@ pub fn eval(args: &EvalArgs, console: Arc<dyn Console>) -> Result<()> {
         Vec::new()
     };
     model::check(args.model.as_deref())?;
+    if let Some(s) = args.skip.iter().find(|s| !every_measure::SKIPPABLE.contains(&s.as_str())) {
+        bail!("--skip {s}: not a measure that can be skipped (use {})", every_measure::SKIPPABLE.join(", "));
+    }
     if let Some(b) = &args.baseline
         && !methods.iter().any(|m| m.name() == *b)
     {
@@ -192,8 +201,12 @@ struct MethodRun {
     set: SimplifiedSet,
     deformed: Deformed,
     measured: Measured,
-    /// Per evaluated pose: the upsampling errors ([`upsampling`]).
-    upsampling: Vec<upsampling::PoseUpsamplers>,
+    /// Per evaluated pose: the upsampling errors ([`upsampling`]); `None` when skipped.
+    upsampling: Option<Vec<upsampling::PoseUpsamplers>>,
+    /// The other models' held-out errors ([`every_measure`]).
+    other_models: Vec<every_measure::OtherModel>,
+    /// The simplified template's v2f against the full one; `None` when skipped.
+    surface_v2f: Option<f64>,
 }
 
 fn evaluate_dataset(
@@ -246,6 +259,13 @@ fn evaluate_dataset(
         .into_par_iter()
         .map(|p| SurfaceIndex::with_vertex_rings(&poses.pose_mesh(p)))
         .collect();
+    let skipped = |name: &str| args.skip.iter().any(|s| s == name);
+    let other_models: Vec<(String, model::EvalModel)> = every_measure::OTHER_MODELS
+        .iter()
+        .filter(|&&name| name != model_name && !skipped(name))
+        .map(|&name| Ok((name.to_owned(), model::resolve(Some(name), stages.rig.is_some())?.1)))
+        .collect::<Result<_>>()?;
+    let full_template = poses.template_mesh();
     let mut prepared = Vec::new();
     for method in methods {
         let set = methods::simplify_and_map(method, &inputs, target)?;
@@ -259,15 +279,38 @@ fn evaluate_dataset(
             method.name(),
             deformed.models.len()
         ));
-        let up_started = Instant::now();
-        let up = upsampling::measure(poses, &set, &deformed, &folds, &evaluated, &fitted, &full_surfaces)
-            .with_context(|| format!("{}: upsampling error", method.name()))?;
-        log(&format!(
-            "{}: upsampled to full resolution, barycentric and fitted U per fold ({:.2} s)",
-            method.name(),
-            up_started.elapsed().as_secs_f64()
-        ));
-        prepared.push((method.clone(), set, deformed, up));
+        let up = if skipped("upsampling") {
+            None
+        } else {
+            let up_started = Instant::now();
+            let up = upsampling::measure(poses, &set, &deformed, &folds, &evaluated, &fitted, &full_surfaces)
+                .with_context(|| format!("{}: upsampling error", method.name()))?;
+            log(&format!(
+                "{}: upsampled to full resolution, barycentric and fitted U per fold ({:.2} s)",
+                method.name(),
+                up_started.elapsed().as_secs_f64()
+            ));
+            Some(up)
+        };
+        // The other models: one that cannot be fitted on this method's set (a part
+        // left without a plane) is reported as such, not an error of the eval.
+        let mut others = Vec::new();
+        for (name, other) in &other_models {
+            let started = Instant::now();
+            let measured = other.deform(&inputs, &set, &folds).map(|deformed| {
+                let run = measure::Run { simplified: &set.mapped.poses, deformed: &deformed };
+                measure::held_out_vs_full(poses, &evaluated, &[run], &full_surfaces).remove(0)
+            });
+            let (poses_errors, error) = match measured {
+                Ok(errors) => (errors, None),
+                Err(e) => (Vec::new(), Some(format!("{e:#}"))),
+            };
+            log(&format!("{}: under {name} ({:.2} s)", method.name(), started.elapsed().as_secs_f64()));
+            others.push(every_measure::OtherModel { model: name.clone(), poses: poses_errors, error });
+        }
+        let surface_v2f =
+            (!skipped("surface")).then(|| desal_measures::metrics::v2f(&set.raw, &full_template));
+        prepared.push((method.clone(), set, deformed, up, others, surface_v2f));
     }
 
     // The model's own floor: the same model on the full-resolution set, the same folds
@@ -300,7 +343,7 @@ fn evaluate_dataset(
     let measure_started = Instant::now();
     let runs: Vec<Run> = prepared
         .iter()
-        .map(|(_, set, deformed, _)| Run { simplified: &set.mapped.poses, deformed })
+        .map(|(_, set, deformed, ..)| Run { simplified: &set.mapped.poses, deformed })
         .collect();
     let measured = measure::measure_indexed(poses, &evaluated, &runs, Some(&full_surfaces));
     let measure_seconds = measure_started.elapsed().as_secs_f64();
@@ -308,12 +351,14 @@ fn evaluate_dataset(
     let runs: Vec<MethodRun> = prepared
         .into_iter()
         .zip(measured)
-        .map(|((method, set, deformed, upsampling), measured)| MethodRun {
+        .map(|((method, set, deformed, upsampling, other_models, surface_v2f), measured)| MethodRun {
             method,
             set,
             deformed,
             measured,
             upsampling,
+            other_models,
+            surface_v2f,
         })
         .collect();
 
@@ -333,6 +378,14 @@ fn evaluate_dataset(
         pipeline, dataset, &inputs, target, &folds, &evaluated, &runs, &regions, &fitted, &baseline,
     );
     report.model = model_name;
+    let base_index = report.methods.iter().position(|m| Some(&m.name) == report.baseline.as_ref());
+    report.measures = every_measure::columns(&report.methods, &report.model, base_index);
+    let names: Vec<String> = report.methods.iter().map(|m| m.name.clone()).collect();
+    report.picks = every_measure::picks(&report.measures, &report.model, &names)
+        .into_iter()
+        .map(|(objective, method, score)| report::Pick { objective: objective.name().into(), method, score })
+        .collect();
+    report.skipped = args.skip.clone();
     report.floor = floor;
     report.measure_seconds = measure_seconds;
     let eval_dir = dataset.out_dir.join("eval");
@@ -468,6 +521,9 @@ fn build_report(
             .collect(),
         baseline: baseline.map(|_| baseline_name.to_owned()),
         methods,
+        measures: Vec::new(),
+        picks: Vec::new(),
+        skipped: Vec::new(),
         joint_band_radius: regions.radius,
         model: String::new(),
         floor: None,
@@ -494,7 +550,7 @@ fn method_report(
             fold: run.deformed.fold_of_pose[pose].expect("every evaluated pose is in a fold"),
             in_sample: run.measured.in_sample[k],
             held_out: run.measured.held_out[k],
-            upsampling: run.upsampling[k],
+            upsampling: run.upsampling.as_ref().map(|u| u[k]),
         })
         .collect();
     let in_sample = &run.deformed.models[0];
@@ -518,7 +574,9 @@ fn method_report(
         face_area: MeanStd::of((0..template.face_count()).map(|f| template.face_area(f))),
         regions: regions.stats(&template, &set.labels),
         summary: report::summarise(&run.measured.in_sample, &run.measured.held_out),
-        upsampling: upsampling::summarise(&run.upsampling, fitted),
+        upsampling: run.upsampling.as_ref().map(|u| upsampling::summarise(u, fitted)),
+        other_models: run.other_models.clone(),
+        surface_v2f: run.surface_v2f,
         versus_baseline: None,
         poses: records,
         models: run.deformed.models.clone(),

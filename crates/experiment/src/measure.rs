@@ -262,6 +262,47 @@ pub fn measure_indexed(
     measured
 }
 
+/// The held-out errors against the full-resolution pose only, per run, in the order of
+/// `evaluated`: what a second deformation model of the same methods needs (the opening
+/// table of `eval.md`), at a quarter of [`measure_indexed`]'s queries. The same figures
+/// as its `held_out[..].vs_full` for the same run.
+pub fn held_out_vs_full(
+    full: &PoseSet,
+    evaluated: &[usize],
+    runs: &[Run],
+    full_surfaces: &[SurfaceIndex],
+) -> Vec<Vec<Errors>> {
+    let full_template =
+        Target::with_surface(full.pose_mesh(full.template), Cow::Borrowed(&full_surfaces[full.template]));
+    let simplified_templates: Vec<Target> =
+        runs.iter().map(|run| Target::new(run.simplified.template_mesh())).collect();
+    let seeds: Vec<RunSeeds> = runs
+        .iter()
+        .zip(&simplified_templates)
+        .map(|(run, template)| RunSeeds::new(full, &full_template, run, template))
+        .collect();
+    let per_pose: Vec<Vec<Errors>> = evaluated
+        .par_iter()
+        .map(|&pose| {
+            let full_target = full_template
+                .with_surface_refitted(full.pose_mesh(pose), Cow::Borrowed(&full_surfaces[pose]));
+            runs.iter()
+                .zip(&seeds)
+                .zip(&simplified_templates)
+                .map(|((run, seeds), template)| {
+                    let held_out =
+                        run.deformed.held_out[pose].as_ref().expect("evaluated poses are held out once");
+                    let deformed =
+                        TriMesh { positions: held_out.clone(), faces: run.simplified.faces.clone() };
+                    let deformed_surface = template.surface.refit(&deformed);
+                    errors(&deformed, &deformed_surface, &full_target, &seeds.vs_full()).0
+                })
+                .collect()
+        })
+        .collect();
+    (0..runs.len()).map(|r| per_pose.iter().map(|pose| pose[r]).collect()).collect()
+}
+
 /// Both ground truths `(simplified, full)` for one deformed pose, with their seeds;
 /// also the per-vertex squared distances to the simplified surface.
 fn pose_errors(

@@ -6,6 +6,7 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
+use crate::every_measure::{Column, OtherModel};
 use crate::measure::{Errors, MeanStd, ModelRun, PoseErrors};
 use crate::regions::RegionStats;
 use crate::upsampling::{PoseUpsamplers, UpsamplingReport};
@@ -35,6 +36,13 @@ pub struct EvalReport {
     /// The row relative changes are taken against, when it was run.
     pub baseline: Option<String>,
     pub methods: Vec<MethodReport>,
+    /// The opening table: every method under every measure ([`crate::every_measure`]).
+    pub measures: Vec<Column>,
+    /// Per use (`[simplify] objective`), the method this run picks for it and its score
+    /// (the geometric mean of its measures over the best method's: 1 for the best).
+    pub picks: Vec<Pick>,
+    /// Measures left out by `--skip`.
+    pub skipped: Vec<String>,
     /// Half-width of the joint bands of the region table, input units.
     pub joint_band_radius: f64,
     /// The deformation model (`desal eval --model`): `scape`, `scape-cv`, `scape-centroid`,
@@ -45,6 +53,14 @@ pub struct EvalReport {
     /// Wall time of measuring every method's poses, seconds.
     pub measure_seconds: f64,
     pub total_seconds: f64,
+}
+
+/// The method a use would pick from this run.
+#[derive(Debug, Clone, Serialize)]
+pub struct Pick {
+    pub objective: String,
+    pub method: String,
+    pub score: f64,
 }
 
 /// The deformation model fitted and measured on the full-resolution pose set itself
@@ -120,7 +136,13 @@ pub struct MethodReport {
     pub summary: Summary,
     /// Held out, per fold: the simplified mesh upsampled to full resolution by COMA's
     /// barycentric U and the fitted U, from the ground truth and from the deformation.
-    pub upsampling: UpsamplingReport,
+    /// Absent with `--skip upsampling`.
+    pub upsampling: Option<UpsamplingReport>,
+    /// The other deformation models' held-out errors (`--skip` leaves them out).
+    pub other_models: Vec<OtherModel>,
+    /// v2f of the simplified template (as stage 3 left it) against the full template:
+    /// the plain simplification's surface error (absent with `--skip surface`).
+    pub surface_v2f: Option<f64>,
     /// Against the baseline (absent for the baseline itself or when it was not run).
     pub versus_baseline: Option<Versus>,
     pub poses: Vec<PoseRecord>,
@@ -196,7 +218,7 @@ pub struct PoseRecord {
     pub fold: usize,
     pub in_sample: PoseErrors,
     pub held_out: PoseErrors,
-    pub upsampling: PoseUpsamplers,
+    pub upsampling: Option<PoseUpsamplers>,
 }
 
 /// Wall times, seconds.
@@ -321,6 +343,7 @@ pub fn markdown(report: &EvalReport, figures: &[String]) -> String {
         report.folds.len(),
         report.baseline.as_deref().unwrap_or("(baseline not run)"),
     );
+    every_measure_table(&mut md, report);
     for (title, split, full) in [
         ("In-sample, vs simplified ground truth (the paper's Table 1 measure)", false, false),
         ("Held-out, vs simplified ground truth", true, false),
@@ -343,6 +366,89 @@ pub fn markdown(report: &EvalReport, figures: &[String]) -> String {
         let _ = writeln!(md, "- `{f}`");
     }
     md
+}
+
+/// The opening table (issue 43): every method under every measure, held out.
+fn every_measure_table(md: &mut String, report: &EvalReport) {
+    let _ = writeln!(md, "## Every method under every measure (held out)\n");
+    let base = report.baseline.as_deref().unwrap_or("(baseline not run)");
+    let _ = writeln!(
+        md,
+        "Each column is one use's measure, held out over the {} folds (a pose is measured by models and \
+         upsamplers that did not see it): the deformation model of this eval and every other one, v2f and v2v \
+         against the full-resolution pose; the simplified ground truth upsampled back to full resolution (mean \
+         squared vertex error; fitted U and COMA's barycentric U, built on the training poses); and the \
+         simplified template's own v2f against the full one. The `{base}` row gives the figure (m²); every other \
+         row its change against it, then the poses on which it is lower and the two-sided sign test's p. \
+         **Bold**: the lowest of the column. A method that wins only the measure it optimises loses elsewhere: \
+         read the whole row.\n",
+        report.folds.len()
+    );
+    let mut header = String::from("| method |");
+    for c in &report.measures {
+        let _ = write!(header, " {} |", c.title);
+    }
+    let _ = writeln!(md, "{header}\n|---|{}", "---|".repeat(report.measures.len()));
+    let best: Vec<Option<usize>> = report.measures.iter().map(|c| c.best()).collect();
+    for (k, m) in report.methods.iter().enumerate() {
+        let mut row = format!("| {} |", m.name);
+        for (c, best) in report.measures.iter().zip(&best) {
+            let text = match c.cells[k] {
+                None => "—".to_owned(),
+                Some(cell) => match cell.percent {
+                    None => sci(cell.mean),
+                    Some(pct) => match (cell.wins, cell.p) {
+                        (Some(w), Some(p)) => {
+                            format!("{} ({w}/{}, p {})", percent(pct), cell.poses, p_value(p))
+                        }
+                        _ => percent(pct),
+                    },
+                },
+            };
+            if *best == Some(k) {
+                let _ = write!(row, " **{text}** |");
+            } else {
+                let _ = write!(row, " {text} |");
+            }
+        }
+        let _ = writeln!(md, "{row}");
+    }
+    let _ = writeln!(md);
+    for m in &report.methods {
+        for o in m.other_models.iter().filter(|o| o.error.is_some()) {
+            let _ = writeln!(
+                md,
+                "- `{}` under `{}`: not measured ({}).",
+                m.name,
+                o.model,
+                o.error.as_deref().unwrap_or_default()
+            );
+        }
+    }
+    if !report.skipped.is_empty() {
+        let _ = writeln!(md, "- Skipped by `--skip`: {}.", report.skipped.join(", "));
+    }
+    if !report.picks.is_empty() {
+        let _ = writeln!(
+            md,
+            "\n**Which method for which use**, from this table (`[simplify] objective`; the score is the \
+             geometric mean of the use's columns over each column's lowest, 1 = the best in all of them):\n"
+        );
+        let _ = writeln!(md, "| objective | measure | pick | score |\n|---|---|---|---|");
+        for p in &report.picks {
+            let objective: crate::every_measure::Objective =
+                p.objective.parse().expect("an objective's own name");
+            let _ = writeln!(
+                md,
+                "| `{}` | {} | `{}` | {:.3} |",
+                p.objective,
+                crate::every_measure::objective_keys(objective, &report.model).join(" and "),
+                p.method,
+                p.score
+            );
+        }
+    }
+    let _ = writeln!(md);
 }
 
 fn floor_table(md: &mut String, report: &EvalReport) {
@@ -417,6 +523,9 @@ fn error_table(md: &mut String, report: &EvalReport, title: &str, held_out: bool
 
 /// The upsampling error of every method (issue 13), beside the deformation tables.
 fn upsampling_table(md: &mut String, report: &EvalReport) {
+    if report.methods.iter().all(|m| m.upsampling.is_none()) {
+        return;
+    }
     let _ = writeln!(md, "## Held-out, upsampled to full resolution\n");
     let _ = writeln!(
         md,
@@ -436,7 +545,8 @@ fn upsampling_table(md: &mut String, report: &EvalReport) {
     let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|");
     let cell = |m: &MeanStd| format!("{} ± {}", sci(m.mean), sci(m.std));
     for m in &report.methods {
-        let (b, f) = (&m.upsampling.barycentric, &m.upsampling.fitted_summary);
+        let Some(up) = &m.upsampling else { continue };
+        let (b, f) = (&up.barycentric, &up.fitted_summary);
         let _ = writeln!(
             md,
             "| {} | {} | {} | {} | {:.3} | {} | {} | {} | {} | {} | {} |",
@@ -444,7 +554,7 @@ fn upsampling_table(md: &mut String, report: &EvalReport) {
             m.vertices,
             cell(&b.ground_truth_mse),
             cell(&f.ground_truth_mse),
-            m.upsampling.ground_truth_mse_ratio,
+            up.ground_truth_mse_ratio,
             cell(&b.ground_truth_v2f),
             cell(&f.ground_truth_v2f),
             cell(&b.deformed_mse),
@@ -635,7 +745,7 @@ mod tests {
             fold: 0,
             in_sample: both,
             held_out: both,
-            upsampling: Default::default(),
+            upsampling: None,
         }
     }
 

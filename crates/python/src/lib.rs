@@ -506,10 +506,13 @@ fn simplify<'py>(
         let positions = convert::points_f64("vertices", vertices)?;
         let faces = convert::faces("faces", faces)?;
         let mut params: SimplifyParams = table("simplify", options)?;
-        if params.method == Some(Method::DesalRefit) {
+        if let Some(method @ (Method::DesalRefit | Method::DesalHierarchy)) = params.method {
+            let name = method.name();
             return Err(bad(
                 "options",
-                "method = \"desal-refit\" refits the pose model over the poses: use simplify_pose_set(..., method=\"desal-refit\")",
+                format!(
+                    "method = \"{name}\" measures the poses: use simplify_pose_set(..., method=\"{name}\")"
+                ),
             ));
         }
         params.saliency = weights.is_some();
@@ -626,7 +629,7 @@ fn stage_params(
             bad(
                 "method",
                 format!(
-                    "{e}: use \"paper\", \"qslim\", \"saliency\", \"balance\", \"multipose\", \"desal\" or \"desal-refit\""
+                    "{e}: use \"paper\", \"qslim\", \"saliency\", \"balance\", \"multipose\", \"desal\", \"desal-refit\", \"desal-hierarchy\" or a cost and a placement such as \"qslim-optimal\""
                 ),
             )
         })?),

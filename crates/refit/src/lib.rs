@@ -44,6 +44,7 @@ use rayon::prelude::*;
 use thiserror::Error;
 
 pub mod flip;
+pub mod upsampler;
 
 /// What can go wrong in `desal-refit`; each says which step failed.
 #[derive(Debug, Error)]

@@ -75,6 +75,11 @@ pub struct SimplifyParams {
     /// stage 3).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub method: Option<Method>,
+    /// The use the dataset is simplified for (`hierarchy`, `pose-model`, `skinning`,
+    /// `surface`): it sets `method` to [`Objective::method`] when no `method` is given.
+    /// Not part of any key (the method it picks is).
+    #[serde(skip)]
+    pub objective: Option<Objective>,
     /// Which of the settings a `method` makes itself (`placement`, `saliency`, `balance`,
     /// `metric`, `normalized_error`) the file or the caller gave, by key: beside a method,
     /// a given one must have the method's value, even when it is the default. Not part
@@ -138,9 +143,15 @@ pub struct SimplifyKnobs {
     #[cfg_attr(feature = "cli", arg(skip))]
     pub seams: Option<Seams>,
     /// One of stage 3's methods, which set some of the settings above themselves:
-    /// `desal`, `desal-refit`, `multipose` (see [`SimplifyParams::method`]).
+    /// `desal`, `desal-refit`, `desal-hierarchy`, `multipose`, or a cost and a placement
+    /// such as `qslim-optimal` (see [`SimplifyParams::method`]).
     #[cfg_attr(feature = "cli", arg(long, value_parser = parse_method))]
     pub method: Option<Method>,
+    /// The use to simplify for, which picks the method: `hierarchy`, `pose-model`,
+    /// `skinning` or `surface` (see [`SimplifyParams::objective`]); `method` overrides it.
+    #[serde(default, deserialize_with = "some_by_name")]
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub objective: Option<Objective>,
 }
 
 /// `--method`: a stage-3 method by its name in pipeline files.
@@ -180,18 +191,30 @@ impl From<SimplifyKnobs> for SimplifyParams {
             normalized_error: file.normalized_error.unwrap_or(default.normalized_error),
             max_corner_normal_deg: file.max_corner_normal_deg,
             seams: file.seams,
-            method: file.method,
+            method: file.method.or(file.objective.map(Objective::method)),
+            objective: file.objective,
             given: given.into_iter().filter(|&(_, g)| g).map(|(key, _)| key).collect(),
         }
     }
 }
 
-/// `method = "desal" | "desal-refit" | "multipose"` (see [`SimplifyParams::method`]).
+/// `method = "desal" | "desal-refit" | "desal-hierarchy" | "multipose" | "<cost>-<placement>"`
+/// (see [`SimplifyParams::method`]): every stage-3 method `desal eval` compares that
+/// needs no peer tool.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
+#[serde(try_from = "String", into = "String")]
 pub enum Method {
+    /// One run with a cost and a placement, as `desal eval`'s `qslim-optimal`, …,
+    /// `paper-subset` (the paper's stage 3 is `paper-optimal`).
+    Quadric {
+        cost: Cost,
+        placement: Placement,
+    },
     Desal,
     DesalRefit,
+    /// The dataset's stage 3 (subset placement), then again weighted by where the fitted
+    /// upsampler brings the poses back worst, held out (`desal_refit::upsampler`).
+    DesalHierarchy,
     /// Multi-pose QEM (Mohr & Gleicher 2003): the quadrics summed over the poses stage 2
     /// reads, subset placement, the cost's other factors as configured; no seams.
     Multipose,
@@ -199,13 +222,35 @@ pub enum Method {
 
 impl Method {
     /// Every method, in the order documentation lists them.
-    pub const ALL: [Method; 3] = [Method::Desal, Method::DesalRefit, Method::Multipose];
+    pub const ALL: [Method; 10] = [
+        Method::Desal,
+        Method::DesalRefit,
+        Method::DesalHierarchy,
+        Method::Multipose,
+        Method::Quadric { cost: Cost::Qslim, placement: Placement::Optimal },
+        Method::Quadric { cost: Cost::Qslim, placement: Placement::Subset },
+        Method::Quadric { cost: Cost::Saliency, placement: Placement::Optimal },
+        Method::Quadric { cost: Cost::Saliency, placement: Placement::Subset },
+        Method::Quadric { cost: Cost::Paper, placement: Placement::Optimal },
+        Method::Quadric { cost: Cost::Paper, placement: Placement::Subset },
+    ];
 
     /// The method's name in pipeline files, on the command line and in Python.
     pub fn name(self) -> &'static str {
         match self {
+            Method::Quadric { cost, placement } => match (cost, placement) {
+                (Cost::Qslim, Placement::Optimal) => "qslim-optimal",
+                (Cost::Qslim, Placement::Subset) => "qslim-subset",
+                (Cost::Saliency, Placement::Optimal) => "saliency-optimal",
+                (Cost::Saliency, Placement::Subset) => "saliency-subset",
+                (Cost::Paper, Placement::Optimal) => "paper-optimal",
+                (Cost::Paper, Placement::Subset) => "paper-subset",
+                (Cost::Balance, Placement::Optimal) => "balance-optimal",
+                (Cost::Balance, Placement::Subset) => "balance-subset",
+            },
             Method::Desal => "desal",
             Method::DesalRefit => "desal-refit",
+            Method::DesalHierarchy => "desal-hierarchy",
             Method::Multipose => "multipose",
         }
     }
@@ -216,7 +261,9 @@ impl Method {
             Method::Desal | Method::DesalRefit => {
                 &["placement", "metric", "saliency", "balance", "normalized_error"]
             }
+            Method::DesalHierarchy => &["placement", "saliency", "balance"],
             Method::Multipose => &["placement"],
+            Method::Quadric { .. } => &["placement", "saliency", "balance"],
         }
     }
 
@@ -224,13 +271,84 @@ impl Method {
     pub fn settings(self, config: SimplifyConfig) -> SimplifyConfig {
         match self {
             Method::Desal | Method::DesalRefit => desal_settings(config),
+            Method::DesalHierarchy => desal_refit::upsampler::settings(config),
             Method::Multipose => SimplifyConfig { placement: Placement::Subset, ..config },
+            Method::Quadric { cost, placement } => {
+                let (saliency, balance) = cost.switches();
+                SimplifyConfig { placement, saliency, balance, ..config }
+            }
         }
     }
 
     /// Whether the method reads the poses stage 2 read (its artifact records which).
     fn reads_poses(self) -> bool {
-        matches!(self, Method::DesalRefit | Method::Multipose)
+        matches!(self, Method::DesalRefit | Method::DesalHierarchy | Method::Multipose)
+    }
+}
+
+impl From<Method> for String {
+    fn from(method: Method) -> String {
+        method.name().into()
+    }
+}
+
+impl TryFrom<String> for Method {
+    type Error = String;
+
+    fn try_from(name: String) -> Result<Self, String> {
+        name.parse()
+    }
+}
+
+/// `objective = "hierarchy" | "pose-model" | "skinning" | "surface"` (see
+/// [`SimplifyParams::objective`]): the use a dataset is simplified for, which picks the
+/// stage-3 method measured best for it (`Objective::method`).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Objective {
+    /// Mesh networks' hierarchies: the lowest held-out upsampling MSE of the fitted U.
+    Hierarchy,
+    /// Trackers with a pose model: the lowest held-out pose-model v2f and v2v.
+    PoseModel,
+    /// Engines: the lowest held-out skinning v2f with the rig's weights.
+    Skinning,
+    /// The plain simplification: the lowest surface distance of the template itself.
+    Surface,
+}
+
+impl Objective {
+    pub const ALL: [Objective; 4] =
+        [Objective::Hierarchy, Objective::PoseModel, Objective::Skinning, Objective::Surface];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Objective::Hierarchy => "hierarchy",
+            Objective::PoseModel => "pose-model",
+            Objective::Skinning => "skinning",
+            Objective::Surface => "surface",
+        }
+    }
+
+    /// The method that serves the use best, as measured on SCAPE and the bundled samples
+    /// (`desal eval`'s opening table; EVAL.md, "Which method for which use").
+    pub fn method(self) -> Method {
+        match self {
+            Objective::Hierarchy => Method::DesalHierarchy,
+            Objective::PoseModel => Method::DesalRefit,
+            Objective::Skinning => Method::Desal,
+            Objective::Surface => Method::Quadric { cost: Cost::Qslim, placement: Placement::Optimal },
+        }
+    }
+}
+
+impl std::str::FromStr for Objective {
+    type Err = String;
+
+    fn from_str(name: &str) -> Result<Self, String> {
+        Objective::ALL.into_iter().find(|o| o.name() == name).ok_or_else(|| {
+            let names: Vec<&str> = Objective::ALL.iter().map(|o| o.name()).collect();
+            format!("unknown objective '{name}': use one of {}", names.join(", "))
+        })
     }
 }
 
@@ -274,6 +392,7 @@ impl Default for SimplifyParams {
             max_corner_normal_deg: None,
             seams: None,
             method: None,
+            objective: None,
             given: Vec::new(),
         }
     }
@@ -355,10 +474,13 @@ impl SimplifyParams {
                 && value != wanted
                 && (value != default || self.given.contains(&key))
             {
-                bail!(
-                    "simplify: method = \"{}\" sets {key} = {wanted} itself; remove {key} = {value}",
-                    method.name()
-                );
+                let by = match self.objective {
+                    Some(o) if o.method() == method => {
+                        format!("objective = \"{}\" picks method = \"{}\", which", o.name(), method.name())
+                    }
+                    _ => format!("method = \"{}\"", method.name()),
+                };
+                bail!("simplify: {by} sets {key} = {wanted} itself; remove {key} = {value}");
             }
         }
         Ok(())
@@ -367,7 +489,8 @@ impl SimplifyParams {
     /// Whether a dataset's seams go to stage 3 (`seams` absent or `keep`, and a method
     /// that takes seams: `multipose` takes none).
     pub fn keeps_seams(&self) -> bool {
-        self.seams.unwrap_or_default() == Seams::Keep && self.method != Some(Method::Multipose)
+        self.seams.unwrap_or_default() == Seams::Keep
+            && !matches!(self.method, Some(Method::Multipose | Method::DesalHierarchy))
     }
 
     /// The cache key of a simplification of `poses`' template without seams. The
@@ -429,6 +552,9 @@ impl SimplifyParams {
         // desal-refit's own constants: a change to any of them makes another result.
         if refit {
             resolved["desal_refit"] = serde_json::to_value(desal_refit::SETTINGS)?;
+        }
+        if self.method == Some(Method::DesalHierarchy) {
+            resolved["desal_hierarchy"] = serde_json::to_value(desal_refit::upsampler::SETTINGS)?;
         }
         Ok(StageKey {
             stage: "simplify".into(),
@@ -662,6 +788,7 @@ pub fn run(
             out.summary.seconds = started.elapsed().as_secs_f64();
             Ok(out)
         }
+        Some(Method::DesalHierarchy) => desal_hierarchy(&config, set, labels, &saliency.seen_poses(set)),
         Some(Method::Multipose) => {
             let poses = set.subset(&saliency.seen_poses(set));
             compute_multipose(&config, &poses, weights, labels)
@@ -675,6 +802,28 @@ pub fn run(
             Ok(out)
         }
     }
+}
+
+/// `desal-hierarchy` (`desal_refit::upsampler`) as stage 3's output: multi-pose quadrics
+/// over the poses `seen` of `set`, weighted by the held-out error of the default fitted
+/// upsampler, with `config`'s target, part borders and guards.
+pub fn desal_hierarchy(
+    config: &SimplifyConfig,
+    set: &PoseSet,
+    labels: &PartLabels,
+    seen: &[usize],
+) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
+    let started = std::time::Instant::now();
+    let upsampler = super::hierarchy::measured_fitted(None)?;
+    let weighted = desal_refit::upsampler::ForUpsampler { poses: set, labels, seen, upsampler: &upsampler }
+        .simplify(config)?;
+    let mut out = output(&weighted.config, Method::DesalHierarchy.name(), &weighted.simplified);
+    out.summary.seconds = started.elapsed().as_secs_f64();
+    out.note = format!(
+        "{} (multi-pose quadrics weighted by the first run's held-out upsampling error, MSE {:.3e})",
+        out.note, weighted.first_mse
+    );
+    Ok(out)
 }
 
 /// `desal-refit`'s result as stage 3's output: the weighted run's, named `desal-refit`,
@@ -850,6 +999,40 @@ mod tests {
     /// setting it would replace, and enters the key: `desal-refit` with the saliency
     /// artifact (the poses stage 2 saw) and the labels as inputs (its constants:
     /// `desal_refit::SETTINGS`); a key without a method is the key stage 3 always had.
+    /// `objective` picks its method; `method` overrides it; a setting the picked method
+    /// makes itself is refused naming the objective; every method's name parses back to
+    /// it, the eval's cost-and-placement names included.
+    #[test]
+    fn an_objective_picks_the_method_measured_best_for_its_use() {
+        for objective in Objective::ALL {
+            let text = format!("target_vertices = 100\nobjective = \"{}\"", objective.name());
+            let parsed: SimplifyParams = toml::from_str(&text).unwrap();
+            assert_eq!((parsed.objective, parsed.method), (Some(objective), Some(objective.method())));
+            parsed.config().unwrap();
+        }
+        let surface: SimplifyParams = toml::from_str("objective = \"surface\"").unwrap();
+        let config = surface.config().unwrap();
+        assert_eq!((config.placement, config.saliency, config.balance), (Placement::Optimal, false, false));
+        let both: SimplifyParams = toml::from_str("objective = \"hierarchy\"\nmethod = \"desal\"").unwrap();
+        assert_eq!(both.method, Some(Method::Desal), "method overrides the objective");
+        let err = toml::from_str::<SimplifyParams>("objective = \"pose-model\"\nbalance = true")
+            .unwrap()
+            .config()
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("objective = \"pose-model\" picks method = \"desal-refit\""), "{err}");
+        let err = toml::from_str::<SimplifyParams>("objective = \"speed\"").unwrap_err().to_string();
+        assert!(err.contains("unknown objective 'speed'"), "{err}");
+        for method in Method::ALL {
+            assert_eq!(method.name().parse::<Method>(), Ok(method));
+            let text = format!("method = \"{}\"", method.name());
+            assert_eq!(toml::from_str::<SimplifyParams>(&text).unwrap().method, Some(method));
+        }
+        let paper: SimplifyParams = toml::from_str("method = \"paper-subset\"").unwrap();
+        let config = paper.config().unwrap();
+        assert_eq!((config.placement, config.saliency, config.balance), (Placement::Subset, true, true));
+    }
+
     #[test]
     fn a_method_sets_its_own_settings_and_enters_the_key() {
         let (poses, saliency, labels) =
