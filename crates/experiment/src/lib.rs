@@ -99,6 +99,11 @@ pub struct EvalArgs {
     /// default; eval.md names what was skipped.
     #[cfg_attr(feature = "cli", arg(long, value_delimiter = ','))]
     pub skip: Vec<String>,
+    /// Pick a method per use: without --methods, evaluate the candidates of every
+    /// `[simplify] objective` (PICK_METHODS) instead of `all`, and print, per objective,
+    /// the method with the lowest held-out error under its measure on this data.
+    #[cfg_attr(feature = "cli", arg(long))]
+    pub pick: bool,
     /// Skip the model's own floor (the model fitted and measured at full resolution).
     #[cfg_attr(feature = "cli", arg(long))]
     pub no_floor: bool,
@@ -143,7 +148,19 @@ pub struct EvalArgs {
 /// Runs `desal eval`: every dataset of the pipeline, every method; prints where each
 /// dataset's results went.
 pub fn eval(args: &EvalArgs, console: Arc<dyn Console>) -> Result<()> {
-    let methods = Method::parse_list(&args.methods)?;
+    let methods = if args.pick && args.methods == ["all"] {
+        let pipeline = desal_driver::pipeline::load(&args.pipeline, args.out.as_deref())?;
+        let rig = pipeline.datasets.iter().any(|d| d.spec.rig.is_some());
+        let pose_model = args.model.as_deref() != Some(model::RIG) && !rig;
+        let names: Vec<String> = PICK_METHODS
+            .iter()
+            .filter(|&&m| pose_model || m != "desal-refit")
+            .map(|m| m.to_string())
+            .collect();
+        Method::parse_list(&names)?
+    } else {
+        Method::parse_list(&args.methods)?
+    };
     let sweep_methods = if args.sweep {
         let sweep_methods = Method::parse_list(&args.sweep_methods).context("--sweep-methods")?;
         if let Some(m) = sweep_methods.iter().find(|m| matches!(m, Method::External { .. })) {
@@ -188,12 +205,25 @@ pub fn eval(args: &EvalArgs, console: Arc<dyn Console>) -> Result<()> {
         desal_driver::run::run_with_stages(&pipeline, &options).context("running the pipeline's stages")?;
     for DatasetRun { dataset, stages, .. } in &runs {
         let dataset = &pipeline.datasets[*dataset];
-        let dir = evaluate_dataset(&pipeline, dataset, stages, &methods, &sweep_methods, args)
+        let (dir, picks) = evaluate_dataset(&pipeline, dataset, stages, &methods, &sweep_methods, args)
             .with_context(|| format!("evaluating dataset '{}'", dataset.spec.name))?;
         desal_driver::print_out(&format!("{}: {}\n", dataset.spec.name, dir.join("eval.md").display()))?;
+        if args.pick {
+            for pick in &picks {
+                desal_driver::print_out(&format!(
+                    "{}: objective = \"{}\" picks {} (score {:.3})\n",
+                    dataset.spec.name, pick.objective, pick.method, pick.score
+                ))?;
+            }
+        }
     }
     Ok(())
 }
+
+/// `--pick`'s candidates: the baseline, the paper's stage 3 and every method an objective
+/// may pick (`desal-refit` only under a pose model).
+pub const PICK_METHODS: [&str; 6] =
+    ["qslim-optimal", "paper-optimal", "desal", "desal-refit", "desal-hierarchy", "multipose"];
 
 /// One method carried through steps 2 and 3.
 struct MethodRun {
@@ -216,7 +246,7 @@ fn evaluate_dataset(
     methods: &[Method],
     sweep_methods: &[Method],
     args: &EvalArgs,
-) -> Result<PathBuf> {
+) -> Result<(PathBuf, Vec<report::Pick>)> {
     let started = Instant::now();
     let (model_name, model) = model::resolve(args.model.as_deref(), stages.rig.is_some())?;
     let name = dataset.spec.name.as_str();
@@ -419,7 +449,7 @@ fn evaluate_dataset(
         desal_io::write_atomic(&dir.join("eval.md"), md.as_bytes())?;
         Ok(())
     })?;
-    Ok(eval_dir)
+    Ok((eval_dir, report.picks))
 }
 
 /// [`desal_measures::model_floor`] of `model` on the full-resolution pose set, driven by
