@@ -288,6 +288,71 @@ fn upsampling_columns_vanish_for_a_method_that_keeps_every_vertex() {
     assert!(md.contains("| full | "), "{md}");
 }
 
+/// Issue 43: the opening table holds every method under every measure. The LBS
+/// columns beside the default model are the figures `--model lbs` gives on its own;
+/// the model's and the upsampling columns are the method's own summaries; `--skip`
+/// leaves measures out and says so; an unknown one is refused before anything runs.
+#[test]
+fn every_method_is_reported_under_every_measure_and_a_skip_is_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = sample_pipeline(dir.path(), &data_samples().join("poses"), SAMPLE_TARGET);
+    let report = eval_ok(&pipeline, "qslim-optimal,multipose", &[]);
+    let columns = report["measures"].as_array().unwrap();
+    let keys: Vec<&str> = columns.iter().map(|c| c["key"].as_str().unwrap()).collect();
+    assert_eq!(
+        keys,
+        [
+            "scape.v2f",
+            "scape.v2v",
+            "lbs.v2f",
+            "lbs.v2v",
+            "upsampling.fitted",
+            "upsampling.barycentric",
+            "surface"
+        ]
+    );
+    let cell = |key: &str, row: usize| &columns.iter().find(|c| c["key"] == key).unwrap()["cells"][row];
+    let multipose = method(&report, "multipose");
+    assert_close(
+        f(&multipose["summary"]["held_out"]["vs_full"]["v2f"]["mean"]),
+        f(&cell("scape.v2f", 1)["mean"]),
+        "the model's column",
+    );
+    assert_close(
+        f(&multipose["upsampling"]["fitted_summary"]["ground_truth_mse"]["mean"]),
+        f(&cell("upsampling.fitted", 1)["mean"]),
+        "the upsampling column",
+    );
+    assert!(cell("scape.v2f", 0)["percent"].is_null(), "the baseline's row is its figure");
+    let wins = cell("lbs.v2v", 1)["wins"].as_u64().unwrap();
+    assert!(wins <= 10 && cell("lbs.v2v", 1)["p"].is_f64());
+    assert!(cell("surface", 1)["wins"].is_null(), "one figure per method: no sign test");
+    let objectives: Vec<&str> =
+        report["picks"].as_array().unwrap().iter().map(|p| p["objective"].as_str().unwrap()).collect();
+    assert_eq!(objectives, ["hierarchy", "pose-model", "skinning", "surface"]);
+
+    let lbs = eval_ok(&pipeline, "qslim-optimal,multipose", &["--model", "lbs", "--skip", "scape"]);
+    for (row, name) in ["qslim-optimal", "multipose"].iter().enumerate() {
+        let alone = f(&method(&lbs, name)["summary"]["held_out"]["vs_full"]["v2f"]["mean"]);
+        assert_close(alone, f(&cell("lbs.v2f", row)["mean"]), &format!("{name}: LBS beside scape"));
+    }
+
+    let skipped = eval_ok(&pipeline, "qslim-optimal,multipose", &["--skip", "lbs,upsampling"]);
+    let keys: Vec<&str> =
+        skipped["measures"].as_array().unwrap().iter().map(|c| c["key"].as_str().unwrap()).collect();
+    assert_eq!(keys, ["scape.v2f", "scape.v2v", "surface"]);
+    assert!(method(&skipped, "multipose")["upsampling"].is_null());
+    let md = std::fs::read_to_string(dir.path().join("out/sample/eval/eval.md")).unwrap();
+    assert!(md.contains("Skipped by `--skip`: lbs, upsampling."), "{md}");
+    assert!(!md.contains("## Held-out, upsampled to full resolution"));
+
+    std::fs::remove_dir_all(dir.path().join("out/sample/eval")).unwrap();
+    let out = desal_measures(&[pipeline.to_str().unwrap(), "--skip", "speed", "--quiet"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("--skip speed: not a measure that can be skipped"), "{}", stderr(&out));
+    assert!(!dir.path().join("out/sample/eval").exists());
+}
+
 /// Each deformation model runs on the same simplification and is recorded; the part
 /// anchors of the default model keep the sample's held-out error below the paper's
 /// centroid placement (the sample's full-resolution floor: 1.46e-6 against 4.11e-5 m²
