@@ -13,9 +13,9 @@ cd "$(dirname "$0")/../.."
 cargo build --release --locked -p desal
 desal=target/release/desal
 out=out/every-measure
-methods=qslim-optimal,paper-optimal,paper-subset,desal,desal-refit,desal-hierarchy,multipose,meshopt
+methods=qslim-optimal,paper-optimal,paper-subset,desal,desal-refit,desal-upsample,multipose,meshopt
 "$desal" eval pipelines/sample.toml --methods "$methods" --out "$out" --pick --quiet
-rig_methods=qslim-subset,paper-subset,desal,desal-hierarchy,multipose,meshopt-regularize
+rig_methods=qslim-subset,paper-subset,desal,desal-upsample,multipose,meshopt-regularize
 gltfpack=${DESAL_GLTFPACK:-$(command -v gltfpack || echo tests/gltf/node_modules/.bin/gltfpack)}
 if [ -x "$gltfpack" ]; then
   rig_methods="$rig_methods,gltfpack,gltfpack-sa"

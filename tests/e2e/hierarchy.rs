@@ -133,7 +133,7 @@ fn sample_hierarchy_reads_back_reruns_one_level_and_matches_the_single_stage_com
 /// A bad `[dataset.hierarchy]` is refused when the pipeline file is read, naming the
 /// rule, before any stage runs (no output folder appears).
 /// Issue 43: without a stage-3 choice, a hierarchy dataset is simplified for its
-/// upsampler (`desal-hierarchy`), and its held-out fitted-U error is below that of the
+/// upsampler (`desal-upsample`), and its held-out fitted-U error is below that of the
 /// paper's stage 3 and of multi-pose quadrics, its first run, at both levels (sample,
 /// [2500, 625]: 1.3e-8 and 1.7e-7 m² against 2.6e-8 and 1.9e-7 for the paper's).
 #[test]
@@ -159,7 +159,7 @@ fn a_hierarchy_is_simplified_for_its_upsampler_by_default() {
     let simplified: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.path().join("out/sample/simplified.json")).unwrap())
             .unwrap();
-    assert_eq!(simplified["method"], "desal-hierarchy", "{simplified}");
+    assert_eq!(simplified["method"], "desal-upsample", "{simplified}");
     let paper_mse = mse(&text);
     let multipose = mse(&text.replace(settings, "method = \"multipose\"\n"));
     for level in 0..2 {

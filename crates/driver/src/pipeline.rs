@@ -458,7 +458,7 @@ mod tests {
         assert_eq!((plain.spec.simplify.objective, plain.spec.simplify.method), (None, None));
         let hierarchy = parse(levels);
         assert_eq!(hierarchy.spec.simplify.objective, Some(Objective::Hierarchy));
-        assert_eq!(hierarchy.spec.simplify.method, Some(Method::DesalHierarchy));
+        assert_eq!(hierarchy.spec.simplify.method, Some(Method::DesalUpsample));
         let given = parse(&format!("{levels}[dataset.simplify]\nbalance = true\n"));
         assert_eq!((given.spec.simplify.objective, given.spec.simplify.method), (None, None));
         let named = parse(&format!("{levels}[dataset.simplify]\nmethod = \"multipose\"\n"));

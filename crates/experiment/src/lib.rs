@@ -223,7 +223,7 @@ pub fn eval(args: &EvalArgs, console: Arc<dyn Console>) -> Result<()> {
 /// `--pick`'s candidates: the baseline, the paper's stage 3 and every method an objective
 /// may pick (`desal-refit` only under a pose model).
 pub const PICK_METHODS: [&str; 6] =
-    ["qslim-optimal", "paper-optimal", "desal", "desal-refit", "desal-hierarchy", "multipose"];
+    ["qslim-optimal", "paper-optimal", "desal", "desal-refit", "desal-upsample", "multipose"];
 
 /// One method carried through steps 2 and 3.
 struct MethodRun {

@@ -8,7 +8,7 @@
 //! | `paper-optimal`, `paper-subset` | cost × saliency × edge length (the paper, Eq. 5) | greedy / subset |
 //! | `desal` | desal's own (issue 17): the template's quadrics, each collapse ranked by its error per unit area (`normalized_error`, meshoptimizer's normalisation), no saliency, no balance (EVAL.md, "desal") | subset |
 //! | `desal-refit` | `desal`, then again with saliency weights from where `desal`'s mesh deforms worse than the full one under the eval's model, fitted in-sample (`refit.rs`); in both runs each collapse keeps the endpoint that the full-resolution model places best (keep penalties, `refit.rs`); then edges flipped to follow the full surface in every pose (`flip.rs`); needs a pose model (not `--model rig`); named explicitly, not in `all` | subset |
-//! | `desal-hierarchy` | `multipose`, then again with saliency weights from where the fitted upsampler (default settings) brings the poses stage 2 saw back worst, held out over 5 folds (`desal_refit::upsampler`); named explicitly, not in `all` | subset |
+//! | `desal-upsample` | `multipose`, then again with saliency weights from where the fitted upsampler (default settings) brings the poses stage 2 saw back worst, held out over 5 folds (`desal_refit::upsampler`); named explicitly, not in `all` | subset |
 //! | `multipose` | Mohr & Gleicher 2003: quadrics summed over all poses, no saliency | subset |
 //! | `multipose-saliency`, `multipose-paper` | the same quadrics, the cost × saliency weight (and × edge length): issue 17's "saliency with multi-pose quadrics", measured worse than `multipose` (EVAL.md); named explicitly, not in `all` | subset |
 //! | `multipose-normalized` | the same quadrics, each collapse ranked by its error per unit area as `desal`'s: measured worse than `desal` in v2v and than `multipose` in v2f (EVAL.md); named explicitly, not in `all` | subset |
@@ -49,7 +49,7 @@ pub enum Method {
     /// The dataset's stage 3 (subset placement), simplified again with weights from where
     /// the fitted upsampler brings the poses back worst, held out
     /// (`desal_refit::upsampler`).
-    DesalHierarchy,
+    DesalUpsample,
     /// Multi-pose QEM (Mohr & Gleicher 2003), subset placement, its cost plain
     /// (`multipose`), weighted like stage 3's (`multipose-saliency`, `multipose-paper`),
     /// or per unit area like `desal`'s (`multipose-normalized`, with `Cost::Qslim`).
@@ -140,7 +140,7 @@ impl Method {
             Method::Quadric { cost, placement } => format!("{}-{}", cost.name(), placement.name()),
             Method::Desal => simplify::Method::Desal.name().into(),
             Method::DesalRefit => simplify::Method::DesalRefit.name().into(),
-            Method::DesalHierarchy => simplify::Method::DesalHierarchy.name().into(),
+            Method::DesalUpsample => simplify::Method::DesalUpsample.name().into(),
             Method::Multipose { cost: Cost::Qslim, normalized: false } => "multipose".into(),
             Method::Multipose { normalized: true, .. } => "multipose-normalized".into(),
             Method::Multipose { cost, .. } => format!("multipose-{}", cost.name()),
@@ -180,7 +180,7 @@ impl Method {
             return Ok(match own {
                 simplify::Method::Desal => Method::Desal,
                 simplify::Method::DesalRefit => Method::DesalRefit,
-                simplify::Method::DesalHierarchy => Method::DesalHierarchy,
+                simplify::Method::DesalUpsample => Method::DesalUpsample,
                 simplify::Method::Quadric { cost, placement } => Method::Quadric { cost, placement },
                 simplify::Method::Multipose => Method::Multipose { cost: Cost::Qslim, normalized: false },
             });
@@ -241,9 +241,7 @@ impl Method {
     pub fn placement(&self) -> &'static str {
         match self {
             Method::Quadric { placement, .. } => placement.name(),
-            Method::Desal | Method::DesalRefit | Method::DesalHierarchy | Method::Multipose { .. } => {
-                "subset"
-            }
+            Method::Desal | Method::DesalRefit | Method::DesalUpsample | Method::Multipose { .. } => "subset",
             #[cfg(feature = "meshopt")]
             Method::Meshopt(_) => "subset",
             #[cfg(feature = "meshlab")]
@@ -257,7 +255,7 @@ impl Method {
 
 fn unknown(text: &str) -> String {
     format!(
-        "unknown method '{text}': use {}, {}, desal-refit, desal-hierarchy, multipose-saliency, multipose-paper, multipose-normalized, a bare qslim/saliency/paper (both placements), all, or external:NAME=PATH",
+        "unknown method '{text}': use {}, {}, desal-refit, desal-upsample, multipose-saliency, multipose-paper, multipose-normalized, a bare qslim/saliency/paper (both placements), all, or external:NAME=PATH",
         ALL.join(", "),
         OPTIONAL.join(", ")
     )
@@ -360,10 +358,10 @@ pub fn simplify_and_map(method: &Method, inputs: &Inputs, target: Target) -> Res
             let out = simplify::refitted(&refitted);
             (out.body, Some(out.summary.stop), out.note)
         }
-        Method::DesalHierarchy => {
+        Method::DesalUpsample => {
             let config = SimplifyConfig { target, ..inputs.base_config.clone() };
             let seen = &inputs.simplification_poses;
-            let out = simplify::desal_hierarchy(&config, &inputs.poses, &inputs.labels, seen)
+            let out = simplify::desal_upsample(&config, &inputs.poses, &inputs.labels, seen)
                 .with_context(|| name.clone())?;
             (out.body, Some(out.summary.stop), out.note)
         }

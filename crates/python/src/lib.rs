@@ -506,7 +506,7 @@ fn simplify<'py>(
         let positions = convert::points_f64("vertices", vertices)?;
         let faces = convert::faces("faces", faces)?;
         let mut params: SimplifyParams = table("simplify", options)?;
-        if let Some(method @ (Method::DesalRefit | Method::DesalHierarchy)) = params.method {
+        if let Some(method @ (Method::DesalRefit | Method::DesalUpsample)) = params.method {
             let name = method.name();
             return Err(bad(
                 "options",
@@ -629,7 +629,7 @@ fn stage_params(
             bad(
                 "method",
                 format!(
-                    "{e}: use \"paper\", \"qslim\", \"saliency\", \"balance\", \"multipose\", \"desal\", \"desal-refit\", \"desal-hierarchy\" or a cost and a placement such as \"qslim-optimal\""
+                    "{e}: use \"paper\", \"qslim\", \"saliency\", \"balance\", \"multipose\", \"desal\", \"desal-refit\", \"desal-upsample\" or a cost and a placement such as \"qslim-optimal\""
                 ),
             )
         })?),

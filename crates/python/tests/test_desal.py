@@ -37,10 +37,23 @@ def pose_set(sample):
 
 @pytest.fixture(scope="module")
 def cli(tmp_path_factory):
-    """`desal run pipelines/sample-hierarchy.toml` (the sample pipeline plus its hierarchy)."""
+    """`pipelines/sample-hierarchy.toml` with the paper's stage 3 (`method =
+    "paper-optimal"`): the sample pipeline plus its hierarchy."""
     out = tmp_path_factory.mktemp("run")
-    reports = desal.run(ROOT / "pipelines" / "sample-hierarchy.toml", out=out)
+    text = (ROOT / "pipelines" / "sample-hierarchy.toml").read_text()
+    text = text.replace("../", f"{ROOT}/").replace("target_vertices = 2500\n", 'target_vertices = 2500\nmethod = "paper-optimal"\n')
+    pipeline = out / "paper-hierarchy.toml"
+    pipeline.write_text(text)
+    reports = desal.run(pipeline, out=out)
     assert [r["dataset"] for r in reports] == ["sample"]
+    return out / "sample"
+
+
+@pytest.fixture(scope="module")
+def cli_default(tmp_path_factory):
+    """`desal run pipelines/sample-hierarchy.toml` as it is: simplified for its upsampler."""
+    out = tmp_path_factory.mktemp("run-default")
+    desal.run(ROOT / "pipelines" / "sample-hierarchy.toml", out=out)
     return out / "sample"
 
 
@@ -214,8 +227,19 @@ def test_load_reads_every_artifact_kind(cli, tmp_path):
         desal.load(truncated)
 
 
-def test_hierarchy_is_the_cli_and_round_trips_through_graphcmr(pose_set, cli, tmp_path):
+def test_the_default_hierarchy_is_the_cli_default(pose_set, cli_default):
+    # Both simplify for the upsampler (objective = "hierarchy", method "desal-upsample").
     h = desal.hierarchy(pose_set, [2500, 625])
+    from_cli = desal.load_hierarchy(cli_default / "hierarchy.npz")
+    for key in h.arrays:
+        np.testing.assert_array_equal(h.arrays[key], from_cli.arrays[key], err_msg=key)
+    paper = desal.hierarchy(pose_set, [2500, 625], method="paper-optimal")
+    errors = [[step["heldout_fitted"]["mse"] for step in x.report] for x in (h, paper)]
+    assert all(a < b for a, b in zip(*errors)), errors
+
+
+def test_hierarchy_is_the_cli_and_round_trips_through_graphcmr(pose_set, cli, tmp_path):
+    h = desal.hierarchy(pose_set, [2500, 625], method="paper-optimal")
     assert h.levels == [13380, 2500, 625]
     from_cli = desal.load_hierarchy(cli / "hierarchy.npz")
     assert sorted(h.arrays) == sorted(from_cli.arrays)

@@ -1,4 +1,4 @@
-//! `desal-hierarchy`: stage 3 weighted by where the fitted upsampler does worse, held out
+//! `desal-upsample`: stage 3 weighted by where the fitted upsampler does worse, held out
 //! (issue 43, item 4) — what `desal-refit` is to the pose model, for mesh networks.
 //!
 //! A hierarchy's level is judged by how well its U brings a pose back to the level above
@@ -50,24 +50,24 @@ pub const FOLDS: usize = 5;
 /// cached results are remade.
 pub const VERSION: u32 = 1;
 
-/// What can go wrong in `desal-hierarchy`; each says which step failed.
+/// What can go wrong in `desal-upsample`; each says which step failed.
 #[derive(Debug, Error)]
 pub enum UpsamplerError {
     #[error(
-        "desal-hierarchy needs two poses besides the template to hold one out (the poses stage 2 read: {0})"
+        "desal-upsample needs two poses besides the template to hold one out (the poses stage 2 read: {0})"
     )]
     TooFewPoses(usize),
-    #[error("desal-hierarchy: stage 3, {run} run")]
+    #[error("desal-upsample: stage 3, {run} run")]
     Simplify {
         run: &'static str,
         #[source]
         source: SimplifyError,
     },
-    #[error("desal-hierarchy: the held-out upsampler of the first run")]
+    #[error("desal-upsample: the held-out upsampler of the first run")]
     Upsampler(#[source] HierarchyError),
 }
 
-/// The settings `desal-hierarchy` resolves to beside stage 3's configuration (its cache
+/// The settings `desal-upsample` resolves to beside stage 3's configuration (its cache
 /// key holds them).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Settings {
@@ -82,7 +82,7 @@ pub struct Settings {
 pub const SETTINGS: Settings =
     Settings { version: VERSION, exponent: EXPONENT, floor: FLOOR, smoothing: SMOOTHING, folds: FOLDS };
 
-/// What `desal-hierarchy` reads: the pose set, its labels (for part borders), the poses
+/// What `desal-upsample` reads: the pose set, its labels (for part borders), the poses
 /// stage 2 saw and the upsampler the hierarchy fits.
 #[derive(Debug, Clone, Copy)]
 pub struct ForUpsampler<'a> {
@@ -92,7 +92,7 @@ pub struct ForUpsampler<'a> {
     pub upsampler: &'a Upsampler,
 }
 
-/// `desal-hierarchy`'s result: the weighted run and its configuration.
+/// `desal-upsample`'s result: the weighted run and its configuration.
 #[derive(Debug)]
 pub struct Weighted {
     pub simplified: Simplified,
@@ -169,7 +169,7 @@ impl ForUpsampler<'_> {
     }
 }
 
-/// `config` with the settings `desal-hierarchy` makes itself: subset placement, the
+/// `config` with the settings `desal-upsample` makes itself: subset placement, the
 /// plain quadric cost (the first run's; the weighted run turns the saliency factor on).
 pub fn settings(config: SimplifyConfig) -> SimplifyConfig {
     SimplifyConfig { placement: Placement::Subset, saliency: false, balance: false, ..config }

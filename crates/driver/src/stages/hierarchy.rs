@@ -34,7 +34,7 @@ use crate::cache::{StageKey, canonical_json};
 use crate::stages::chain::{ChainInput, ChainSettings, chain};
 use crate::stages::runner::{Memory, Stage, StageOutput, Staged, Store};
 use crate::stages::saliency::SaliencyParams;
-use crate::stages::simplify::SimplifyParams;
+use crate::stages::simplify::{Method, SimplifyParams};
 
 /// Folds of the held-out upsampling error: fold `f` measures the poses with
 /// `index % HELDOUT_FOLDS == f` and fits on the others (even/odd, as the crate measured).
@@ -149,13 +149,20 @@ pub struct LevelSettings<'a> {
 
 impl LevelSettings<'_> {
     /// Stage 3's parameters for level `step + 1`: the dataset's, with this level's target
-    /// and subset placement.
+    /// and subset placement (a `<cost>-optimal` method becomes its `<cost>-subset`).
     fn simplify_params(&self, step: usize) -> SimplifyParams {
+        let method = match self.chain.simplify.method {
+            Some(Method::Quadric { cost, .. }) => {
+                Some(Method::Quadric { cost, placement: Placement::Subset })
+            }
+            method => method,
+        };
         SimplifyParams {
             target_vertices: Some(self.hierarchy.levels[step]),
             target_faces: None,
             ratio: None,
             placement: Placement::Subset,
+            method,
             ..self.chain.simplify.clone()
         }
     }

@@ -143,7 +143,7 @@ pub struct SimplifyKnobs {
     #[cfg_attr(feature = "cli", arg(skip))]
     pub seams: Option<Seams>,
     /// One of stage 3's methods, which set some of the settings above themselves:
-    /// `desal`, `desal-refit`, `desal-hierarchy`, `multipose`, or a cost and a placement
+    /// `desal`, `desal-refit`, `desal-upsample`, `multipose`, or a cost and a placement
     /// such as `qslim-optimal` (see [`SimplifyParams::method`]).
     #[cfg_attr(feature = "cli", arg(long, value_parser = parse_method))]
     pub method: Option<Method>,
@@ -198,7 +198,7 @@ impl From<SimplifyKnobs> for SimplifyParams {
     }
 }
 
-/// `method = "desal" | "desal-refit" | "desal-hierarchy" | "multipose" | "<cost>-<placement>"`
+/// `method = "desal" | "desal-refit" | "desal-upsample" | "multipose" | "<cost>-<placement>"`
 /// (see [`SimplifyParams::method`]): every stage-3 method `desal eval` compares that
 /// needs no peer tool.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
@@ -214,7 +214,7 @@ pub enum Method {
     DesalRefit,
     /// The dataset's stage 3 (subset placement), then again weighted by where the fitted
     /// upsampler brings the poses back worst, held out (`desal_refit::upsampler`).
-    DesalHierarchy,
+    DesalUpsample,
     /// Multi-pose QEM (Mohr & Gleicher 2003): the quadrics summed over the poses stage 2
     /// reads, subset placement, the cost's other factors as configured; no seams.
     Multipose,
@@ -225,7 +225,7 @@ impl Method {
     pub const ALL: [Method; 10] = [
         Method::Desal,
         Method::DesalRefit,
-        Method::DesalHierarchy,
+        Method::DesalUpsample,
         Method::Multipose,
         Method::Quadric { cost: Cost::Qslim, placement: Placement::Optimal },
         Method::Quadric { cost: Cost::Qslim, placement: Placement::Subset },
@@ -250,7 +250,7 @@ impl Method {
             },
             Method::Desal => "desal",
             Method::DesalRefit => "desal-refit",
-            Method::DesalHierarchy => "desal-hierarchy",
+            Method::DesalUpsample => "desal-upsample",
             Method::Multipose => "multipose",
         }
     }
@@ -261,7 +261,7 @@ impl Method {
             Method::Desal | Method::DesalRefit => {
                 &["placement", "metric", "saliency", "balance", "normalized_error"]
             }
-            Method::DesalHierarchy => &["placement", "saliency", "balance"],
+            Method::DesalUpsample => &["placement", "saliency", "balance"],
             Method::Multipose => &["placement"],
             Method::Quadric { .. } => &["placement", "saliency", "balance"],
         }
@@ -271,7 +271,7 @@ impl Method {
     pub fn settings(self, config: SimplifyConfig) -> SimplifyConfig {
         match self {
             Method::Desal | Method::DesalRefit => desal_settings(config),
-            Method::DesalHierarchy => desal_refit::upsampler::settings(config),
+            Method::DesalUpsample => desal_refit::upsampler::settings(config),
             Method::Multipose => SimplifyConfig { placement: Placement::Subset, ..config },
             Method::Quadric { cost, placement } => {
                 let (saliency, balance) = cost.switches();
@@ -282,7 +282,7 @@ impl Method {
 
     /// Whether the method reads the poses stage 2 read (its artifact records which).
     fn reads_poses(self) -> bool {
-        matches!(self, Method::DesalRefit | Method::DesalHierarchy | Method::Multipose)
+        matches!(self, Method::DesalRefit | Method::DesalUpsample | Method::Multipose)
     }
 }
 
@@ -333,7 +333,7 @@ impl Objective {
     /// (`desal eval`'s opening table; EVAL.md, "Which method for which use").
     pub fn method(self) -> Method {
         match self {
-            Objective::Hierarchy => Method::DesalHierarchy,
+            Objective::Hierarchy => Method::DesalUpsample,
             Objective::PoseModel => Method::DesalRefit,
             Objective::Skinning => Method::Desal,
             Objective::Surface => Method::Quadric { cost: Cost::Qslim, placement: Placement::Optimal },
@@ -490,7 +490,7 @@ impl SimplifyParams {
     /// that takes seams: `multipose` takes none).
     pub fn keeps_seams(&self) -> bool {
         self.seams.unwrap_or_default() == Seams::Keep
-            && !matches!(self.method, Some(Method::Multipose | Method::DesalHierarchy))
+            && !matches!(self.method, Some(Method::Multipose | Method::DesalUpsample))
     }
 
     /// The cache key of a simplification of `poses`' template without seams. The
@@ -553,8 +553,8 @@ impl SimplifyParams {
         if refit {
             resolved["desal_refit"] = serde_json::to_value(desal_refit::SETTINGS)?;
         }
-        if self.method == Some(Method::DesalHierarchy) {
-            resolved["desal_hierarchy"] = serde_json::to_value(desal_refit::upsampler::SETTINGS)?;
+        if self.method == Some(Method::DesalUpsample) {
+            resolved["desal_upsample"] = serde_json::to_value(desal_refit::upsampler::SETTINGS)?;
         }
         Ok(StageKey {
             stage: "simplify".into(),
@@ -788,7 +788,7 @@ pub fn run(
             out.summary.seconds = started.elapsed().as_secs_f64();
             Ok(out)
         }
-        Some(Method::DesalHierarchy) => desal_hierarchy(&config, set, labels, &saliency.seen_poses(set)),
+        Some(Method::DesalUpsample) => desal_upsample(&config, set, labels, &saliency.seen_poses(set)),
         Some(Method::Multipose) => {
             let poses = set.subset(&saliency.seen_poses(set));
             compute_multipose(&config, &poses, weights, labels)
@@ -804,10 +804,10 @@ pub fn run(
     }
 }
 
-/// `desal-hierarchy` (`desal_refit::upsampler`) as stage 3's output: multi-pose quadrics
+/// `desal-upsample` (`desal_refit::upsampler`) as stage 3's output: multi-pose quadrics
 /// over the poses `seen` of `set`, weighted by the held-out error of the default fitted
 /// upsampler, with `config`'s target, part borders and guards.
-pub fn desal_hierarchy(
+pub fn desal_upsample(
     config: &SimplifyConfig,
     set: &PoseSet,
     labels: &PartLabels,
@@ -817,7 +817,7 @@ pub fn desal_hierarchy(
     let upsampler = super::hierarchy::measured_fitted(None)?;
     let weighted = desal_refit::upsampler::ForUpsampler { poses: set, labels, seen, upsampler: &upsampler }
         .simplify(config)?;
-    let mut out = output(&weighted.config, Method::DesalHierarchy.name(), &weighted.simplified);
+    let mut out = output(&weighted.config, Method::DesalUpsample.name(), &weighted.simplified);
     out.summary.seconds = started.elapsed().as_secs_f64();
     out.note = format!(
         "{} (multi-pose quadrics weighted by the first run's held-out upsampling error, MSE {:.3e})",

@@ -421,7 +421,7 @@ def hierarchy(
     neighbours: Optional[int] = None,
     ridge: Optional[float] = None,
     neighbourhood: Optional[str] = None,
-    method: str = "paper",
+    method: str = "desal-upsample",
     placement: Optional[str] = None,
     template: int = 0,
     simplify_options: Optional[dict] = None,
@@ -430,8 +430,12 @@ def hierarchy(
     """A multi-level hierarchy for mesh networks (COMA / GraphCMR style).
 
     ``levels`` are the coarse vertex counts, strictly decreasing (e.g. ``[2500, 625]``).
-    Each level is simplified from the one above by ``method`` (a cost, ``"multipose"``,
-    ``"desal"`` or ``"desal-refit"`` as in :func:`simplify_pose_set`); ``upsampler`` is
+    Each level is simplified from the one above by ``method``: by default
+    ``"desal-upsample"`` (multi-pose quadrics weighted by where the fitted upsampler does
+    worst, held out: the lowest upsampling error measured, as a pipeline file's default
+    with a hierarchy), or any method of :func:`simplify_pose_set` (a cost such as
+    ``"paper"``, ``"multipose"``, ``"desal"``, ``"desal-refit"``, ``"qslim-optimal"``);
+    ``upsampler`` is
     ``"fitted"`` (least squares over the poses) or ``"barycentric"`` (COMA's rule).
     The same as ``[dataset.hierarchy]`` in a pipeline file.
     """
