@@ -197,6 +197,14 @@ impl RunSeeds {
     }
 }
 
+/// Per run, the target of its simplified template and where its queries start.
+fn run_targets(full: &PoseSet, full_template: &Target, runs: &[Run]) -> (Vec<Target<'static>>, Vec<RunSeeds>) {
+    let templates: Vec<Target> = runs.iter().map(|run| Target::new(run.simplified.template_mesh())).collect();
+    let seeds =
+        runs.iter().zip(&templates).map(|(run, template)| RunSeeds::new(full, full_template, run, template)).collect();
+    (templates, seeds)
+}
+
 /// Measures every method's deformed poses `evaluated` (none of them the template)
 /// against the simplified and full ground truths. Returns one [`Measured`] per run.
 pub fn measure(full: &PoseSet, evaluated: &[usize], runs: &[Run]) -> Vec<Measured> {
@@ -222,13 +230,7 @@ pub fn measure_indexed(
         Some(s) => full_template.with_surface_refitted(full.pose_mesh(pose), Cow::Borrowed(&s[pose])),
         None => full_template.refit(full.pose_mesh(pose)),
     };
-    let simplified_templates: Vec<Target> =
-        runs.iter().map(|run| Target::new(run.simplified.template_mesh())).collect();
-    let seeds: Vec<RunSeeds> = runs
-        .iter()
-        .zip(&simplified_templates)
-        .map(|(run, template)| RunSeeds::new(full, &full_template, run, template))
-        .collect();
+    let (simplified_templates, seeds) = run_targets(full, &full_template, runs);
     let per_pose: Vec<PoseResult> = evaluated
         .par_iter()
         .map(|&pose| {
@@ -274,13 +276,7 @@ pub fn held_out_vs_full(
 ) -> Vec<Vec<Errors>> {
     let full_template =
         Target::with_surface(full.pose_mesh(full.template), Cow::Borrowed(&full_surfaces[full.template]));
-    let simplified_templates: Vec<Target> =
-        runs.iter().map(|run| Target::new(run.simplified.template_mesh())).collect();
-    let seeds: Vec<RunSeeds> = runs
-        .iter()
-        .zip(&simplified_templates)
-        .map(|(run, template)| RunSeeds::new(full, &full_template, run, template))
-        .collect();
+    let (simplified_templates, seeds) = run_targets(full, &full_template, runs);
     let per_pose: Vec<Vec<Errors>> = evaluated
         .par_iter()
         .map(|&pose| {
