@@ -204,7 +204,10 @@ async function framing(tab, times) {
   const problems = [];
   const step = Math.max(1, Math.ceil(times.length / 12));
   const sampled = times.filter((_, i) => i % step === 0);
-  for (const size of [viewport(options.viewport), { width: 1280, height: 720 }, { width: 480, height: 900 }]) {
+  const sizes = [viewport(options.viewport), { width: 1280, height: 720 }, { width: 480, height: 900 }].filter(
+    (size, i, all) => all.findIndex((s) => s.width === size.width && s.height === size.height) === i,
+  );
+  for (const size of sizes) {
     await resize(tab, size);
     let smallest = 1;
     for (const t of sampled) {
