@@ -518,3 +518,89 @@ fn issue_42_every_skinned_mesh_is_simplified_with_a_table_of_its_vertices() {
         serde_json::from_slice(&std::fs::read(folder.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["input"]["vertices"], 13380, "mesh = \"Body\" picks one");
 }
+
+/// The JSON chunk and the binary chunk of a `.glb`.
+fn glb_parts(bytes: &[u8]) -> (serde_json::Value, Vec<u8>) {
+    let glb = gltf::binary::Glb::from_slice(bytes).unwrap();
+    (serde_json::from_slice(&glb.json).unwrap(), glb.bin.map(|b| b.into_owned()).unwrap_or_default())
+}
+
+/// The bytes of buffer view `view` of a `.glb`'s document.
+fn view_bytes<'a>(json: &serde_json::Value, bin: &'a [u8], view: &serde_json::Value) -> &'a [u8] {
+    let view = &json["bufferViews"][view.as_u64().unwrap() as usize];
+    let start = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+    &bin[start..start + view["byteLength"].as_u64().unwrap() as usize]
+}
+
+/// Issue 42, items 10 and 11: `pipelines/avatar-sample.toml` on the bundled avatar
+/// (three meshes on one skin, textured materials, five named morph targets) simplifies
+/// every mesh under one budget and keeps each mesh's material, every image's bytes, the
+/// morph targets with their names and the animation (its morph-weight channel included);
+/// `view.html` shows the input file's own bytes (so its materials and textures), then
+/// `simplified.glb`.
+#[test]
+fn issue_42_the_avatar_sample_keeps_its_materials_textures_and_morph_targets() {
+    use base64::Engine;
+    let dir = tempfile::tempdir().unwrap();
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let avatar = repo.join("data-samples/avatar.glb");
+    let text = std::fs::read_to_string(repo.join("pipelines/avatar-sample.toml"))
+        .unwrap()
+        .replace("out = \"../out\"", "out = \"out\"")
+        .replace("../data-samples/avatar.glb", "avatar.glb");
+    std::fs::copy(&avatar, dir.path().join("avatar.glb")).unwrap();
+    let pipeline = dir.path().join("avatar-sample.toml");
+    std::fs::write(&pipeline, text).unwrap();
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let folder = dir.path().join("out/avatar-sample");
+    let input_bytes = std::fs::read(&avatar).unwrap();
+    let output_bytes = std::fs::read(folder.join("simplified.glb")).unwrap();
+    let (input, input_bin) = glb_parts(&input_bytes);
+    let (output, output_bin) = glb_parts(&output_bytes);
+    for key in ["materials", "textures", "samplers", "skins", "nodes", "scenes"] {
+        assert_eq!(output[key], input[key], "{key}");
+    }
+    let images = input["images"].as_array().unwrap();
+    assert_eq!(images.len(), 3);
+    for (i, image) in images.iter().enumerate() {
+        assert_eq!(output["images"][i]["mimeType"], image["mimeType"]);
+        assert_eq!(
+            view_bytes(&output, &output_bin, &output["images"][i]["bufferView"]),
+            view_bytes(&input, &input_bin, &image["bufferView"]),
+            "image {i}'s bytes"
+        );
+    }
+    let count = |json: &serde_json::Value, m: usize| {
+        let position = &json["meshes"][m]["primitives"][0]["attributes"]["POSITION"];
+        json["accessors"][position.as_u64().unwrap() as usize]["count"].as_u64().unwrap()
+    };
+    for m in 0..3 {
+        let (before, after) = (&input["meshes"][m], &output["meshes"][m]);
+        assert_eq!(after["name"], before["name"]);
+        assert_eq!(after["primitives"][0]["material"], before["primitives"][0]["material"], "mesh {m}");
+        assert!(count(&output, m) < count(&input, m), "mesh {m} is simplified");
+    }
+    let body = &output["meshes"][0];
+    assert_eq!(body["extras"]["targetNames"], serde_json::json!(desal_sample::source::FACE_UNITS));
+    assert_eq!(body["weights"], input["meshes"][0]["weights"]);
+    assert_eq!(body["primitives"][0]["targets"].as_array().unwrap().len(), 5);
+    let paths = |json: &serde_json::Value| -> Vec<serde_json::Value> {
+        json["animations"][0]["channels"].as_array().unwrap().iter().map(|c| c["target"].clone()).collect()
+    };
+    assert_eq!(paths(&output), paths(&input));
+    assert!(paths(&output).iter().any(|t| t["path"] == "weights"), "the morph-weight channel");
+
+    let html = std::fs::read_to_string(folder.join("view.html")).unwrap();
+    let opening = "<script id=\"desal-data\" type=\"application/json\">";
+    let start = html.find(opening).unwrap() + opening.len();
+    let end = start + html[start..].find("</script>").unwrap();
+    let data: serde_json::Value = serde_json::from_str(&html[start..end]).unwrap();
+    let decode = |level: &serde_json::Value| {
+        base64::engine::general_purpose::STANDARD.decode(level["glb"].as_str().unwrap()).unwrap()
+    };
+    let levels = data["levels"].as_array().unwrap();
+    assert_eq!(levels.iter().map(|l| l["label"].clone()).collect::<Vec<_>>(), ["input", "simplified"]);
+    assert!(decode(&levels[0]) == input_bytes, "the input level is the input file");
+    assert!(decode(&levels[1]) == output_bytes, "the simplified level is simplified.glb");
+}

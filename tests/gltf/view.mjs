@@ -6,6 +6,19 @@
 // Fails on a mismatch above the tolerance, a load error, a console error, a page error,
 // or a request the page should not make.
 //
+// With the positions, three checks of what the page draws, on its canvas's pixels:
+// - framing: at every keyframe (up to 12), at the --viewport size and at 1280x720 and
+//   480x900, nothing is drawn within 2 pixels of either view's border (the whole body
+//   shows) and the drawn region spans at least half the view's height or width (it is
+//   not tiny);
+// - morph targets: the page has one slider per name in FULL.glb's `extras.targetNames`,
+//   and each target at weight 1 moves some vertex of the input by more than 0.1 mm;
+// - with --textures, that textures show: at keyframe k, the page drawn with its materials'
+//   texture maps and without them (`setTextures(false)`: base colours only) must differ
+//   by more than 24 (of 255, in some channel) at half of the drawn pixels of each view,
+//   and the textured pixels must be coloured (mean HSV saturation above 0.25): a flat
+//   grey or untextured page fails both (the flat colours of an untextured rig have 0.17).
+//
 // Two pages (crates/rig/src/viewer.rs):
 // - the offline page (`DESAL_THREE=.../node_modules/three desal run ...`): three.js is
 //   inlined, and any request that is not file:// or data: fails the check;
@@ -20,7 +33,7 @@
 //
 // Usage: node tests/gltf/view.mjs VIEW.html FULL.glb SIMPLIFIED.glb LBS_POSITIONS
 //          [--frame K] [--screenshot PNG] [--tolerance 1e-5] [--chromium /usr/bin/chromium]
-//          [--route-three DIR [--tamper-each]]
+//          [--route-three DIR [--tamper-each]] [--textures] [--viewport 1200x700]
 // (after `npm ci` in tests/gltf; LBS_POSITIONS is the built example binary).
 import { execFileSync } from 'node:child_process';
 import { existsSync, readFileSync } from 'node:fs';
@@ -29,8 +42,15 @@ import { pathToFileURL } from 'node:url';
 import { chromium } from 'playwright-core';
 
 const positional = [];
-const options = { frame: '5', screenshot: null, tolerance: '1e-5', chromium: '/usr/bin/chromium', 'route-three': null };
-const flags = new Set(['tamper-each']);
+const options = {
+  frame: '5',
+  screenshot: null,
+  tolerance: '1e-5',
+  chromium: '/usr/bin/chromium',
+  'route-three': null,
+  viewport: '1200x700',
+};
+const flags = new Set(['tamper-each', 'textures']);
 const argv = process.argv.slice(2);
 for (let i = 0; i < argv.length; i++) {
   if (flags.has(argv[i].slice(2))) options[argv[i].slice(2)] = true;
@@ -44,6 +64,11 @@ if (positional.length !== 4 || (options['tamper-each'] && !options['route-three'
   process.exit(2);
 }
 const [page, fullGlb, simplifiedGlb, lbs] = positional;
+const viewport = (text) => {
+  const [width, height] = text.split('x').map(Number);
+  if (!(width > 0 && height > 0)) throw new Error(`--viewport ${text} is not WIDTHxHEIGHT`);
+  return { width, height };
+};
 const tolerance = Number(options.tolerance);
 const frame = Number(options.frame);
 const threeDir = options['route-three'];
@@ -63,7 +88,7 @@ const pinnedModules = Object.keys(pin.sha384).filter((path) => path.endsWith('.j
 // served. With `threeDir`, the pinned URLs are answered from that folder (`tampered`: the
 // path whose last byte is changed) and every other http(s) request is refused.
 async function open(browser, tampered = null) {
-  const tab = await browser.newPage({ viewport: { width: 1200, height: 700 } });
+  const tab = await browser.newPage({ viewport: viewport(options.viewport) });
   const seen = { problems: [], consoleErrors: [], served: [] };
   tab.on('console', (m) => m.type() === 'error' && seen.consoleErrors.push(m.text()));
   tab.on('pageerror', (e) => seen.problems.push(`page error: ${e.message}`));
@@ -125,6 +150,153 @@ async function tamperEach(browser) {
   return problems;
 }
 
+// The names in `extras.targetNames` of every mesh of a .glb, in mesh order, once each.
+function targetNames(file) {
+  const bytes = readFileSync(file);
+  if (bytes.toString('latin1', 0, 4) !== 'glTF') return [];
+  const json = JSON.parse(bytes.toString('utf8', 20, 20 + bytes.readUInt32LE(12)));
+  const names = [];
+  for (const mesh of json.meshes ?? []) for (const n of mesh.extras?.targetNames ?? []) if (!names.includes(n)) names.push(n);
+  return names;
+}
+
+// Runs in the page: the canvas's pixels, split into its two views, each summarised by the
+// drawn region (pixels that are not the background, #f4f4f2): its bounds, whether it
+// comes within 2 pixels of the view's border, and its pixels' RGB (when `keep`).
+function readViews(keep) {
+  const canvas = document.getElementById('canvas');
+  const copy = document.createElement('canvas');
+  [copy.width, copy.height] = [canvas.width, canvas.height];
+  const context = copy.getContext('2d');
+  context.drawImage(canvas, 0, 0);
+  const { data, width, height } = context.getImageData(0, 0, copy.width, copy.height);
+  const half = Math.floor(width / 2);
+  return [0, 1].map((side) => {
+    const view = { width: half, height, drawn: 0, touches: false, top: height, bottom: -1, left: half, right: -1, pixels: keep ? [] : null };
+    for (let y = 0; y < height; y++) {
+      for (let x = side * half; x < (side + 1) * half; x++) {
+        const i = 4 * (y * width + x);
+        const [r, g, b] = [data[i], data[i + 1], data[i + 2]];
+        const background = Math.abs(r - 244) + Math.abs(g - 244) + Math.abs(b - 242) <= 12;
+        if (keep) view.pixels.push(background ? -1 : (r << 16) | (g << 8) | b);
+        if (background) continue;
+        view.drawn++;
+        const lx = x - side * half;
+        view.top = Math.min(view.top, y);
+        view.bottom = Math.max(view.bottom, y);
+        view.left = Math.min(view.left, lx);
+        view.right = Math.max(view.right, lx);
+        if (lx < 2 || lx >= half - 2 || y < 2 || y >= height - 2) view.touches = true;
+      }
+    }
+    return view;
+  });
+}
+
+// Resizes the tab and waits for the page's animation loop to draw at the new size.
+async function resize(tab, size) {
+  await tab.setViewportSize(size);
+  await tab.evaluate(() => new Promise((done) => requestAnimationFrame(() => requestAnimationFrame(done))));
+}
+
+// The framing check (see the header).
+async function framing(tab, times) {
+  const problems = [];
+  const step = Math.max(1, Math.ceil(times.length / 12));
+  const sampled = times.filter((_, i) => i % step === 0);
+  const sizes = [viewport(options.viewport), { width: 1280, height: 720 }, { width: 480, height: 900 }].filter(
+    (size, i, all) => all.findIndex((s) => s.width === size.width && s.height === size.height) === i,
+  );
+  for (const size of sizes) {
+    await resize(tab, size);
+    let smallest = 1;
+    for (const t of sampled) {
+      await tab.evaluate((time) => void window.desalView.pose(time), t);
+      const views = await tab.evaluate(readViews, false);
+      views.forEach((v, side) => {
+        const which = side === 0 ? 'input' : 'simplified';
+        const share = Math.max((v.bottom - v.top + 1) / v.height, (v.right - v.left + 1) / v.width);
+        smallest = Math.min(smallest, share);
+        if (v.drawn === 0) problems.push(`framing at ${size.width}x${size.height}, t = ${t}: the ${which} view is empty`);
+        else if (v.touches) problems.push(`framing at ${size.width}x${size.height}, t = ${t}: the ${which} rig reaches the view's border (cut off)`);
+        else if (share < 0.5) problems.push(`framing at ${size.width}x${size.height}, t = ${t}: the ${which} rig spans ${share.toFixed(2)} of the view`);
+      });
+    }
+    const failed = problems.filter((p) => p.startsWith(`framing at ${size.width}x${size.height},`)).length;
+    console.log(
+      `framing at ${size.width}x${size.height}: ${sampled.length} keyframes, ${failed ? `${failed} views cut off, empty or tiny` : 'both rigs inside each view'}, spanning at least ${(100 * smallest).toFixed(0)}% of its height or width`,
+    );
+  }
+  await resize(tab, viewport(options.viewport));
+  return problems;
+}
+
+// The morph-target check (see the header).
+async function morphs(tab, time) {
+  const problems = [];
+  const expected = targetNames(fullGlb);
+  const state = await tab.evaluate(() => ({
+    names: window.desalView.morphTargets,
+    sliders: [...document.querySelectorAll('#morphs input[type=range]')].map((s) => s.dataset.morph),
+  }));
+  if (JSON.stringify(state.names) !== JSON.stringify(expected) || JSON.stringify(state.sliders) !== JSON.stringify(expected)) {
+    problems.push(`morph sliders ${JSON.stringify(state.sliders)} (page: ${JSON.stringify(state.names)}), ${fullGlb} names ${JSON.stringify(expected)}`);
+    return problems;
+  }
+  if (!expected.length) return problems;
+  const rest = await tab.evaluate((t) => window.desalView.pose(t).full, time);
+  const moved = [];
+  for (const name of expected) {
+    const posed = await tab.evaluate(
+      ([n, t]) => {
+        window.desalView.setMorph(n, 1);
+        const out = window.desalView.pose(t).full;
+        window.desalView.setMorph(n, null);
+        return out;
+      },
+      [name, time],
+    );
+    let most = 0;
+    for (let i = 0; i < rest.length; i++) most = Math.max(most, Math.abs(posed[i] - rest[i]));
+    moved.push(`${name} ${(1000 * most).toFixed(1)} mm`);
+    if (!(most > 1e-4)) problems.push(`morph target ${name} at weight 1 moves no vertex of the input (${most} m)`);
+  }
+  console.log(`morph sliders: ${expected.length} (${fullGlb}'s targetNames); largest move at weight 1: ${moved.join(', ')}`);
+  return problems;
+}
+
+// The texture check (see the header).
+async function textures(tab, time) {
+  const problems = [];
+  await tab.evaluate((t) => void window.desalView.pose(t), time);
+  const textured = await tab.evaluate(readViews, true);
+  await tab.evaluate(() => window.desalView.setTextures(false));
+  const plain = await tab.evaluate(readViews, true);
+  await tab.evaluate(() => window.desalView.setTextures(true));
+  const rgb = (c) => [(c >> 16) & 255, (c >> 8) & 255, c & 255];
+  const saturation = ([r, g, b]) => (Math.max(r, g, b) === 0 ? 0 : 1 - Math.min(r, g, b) / Math.max(r, g, b));
+  textured.forEach((view, side) => {
+    const which = side === 0 ? 'input' : 'simplified';
+    let [drawn, differing, saturated] = [0, 0, 0];
+    for (let i = 0; i < view.pixels.length; i++) {
+      const [a, b] = [view.pixels[i], plain[side].pixels[i]];
+      if (a < 0 && b < 0) continue;
+      drawn++;
+      if (a >= 0) saturated += saturation(rgb(a));
+      const [x, y] = [rgb(Math.max(a, 0)), rgb(Math.max(b, 0))];
+      if (a < 0 || b < 0 || x.some((c, k) => Math.abs(c - y[k]) > 24)) differing++;
+    }
+    const share = drawn ? differing / drawn : 0;
+    const meanSaturation = view.drawn ? saturated / view.drawn : 0;
+    console.log(
+      `textures, ${which}: ${drawn} drawn pixels, ${(100 * share).toFixed(1)}% differ from the page without texture maps, mean saturation ${meanSaturation.toFixed(3)}`,
+    );
+    if (!(share > 0.5)) problems.push(`textures do not show on the ${which} rig: ${(100 * share).toFixed(1)}% of its pixels change without texture maps`);
+    if (!(meanSaturation > 0.25)) problems.push(`the ${which} rig is drawn grey: mean saturation ${meanSaturation.toFixed(3)}`);
+  });
+  return problems;
+}
+
 // The skinning check (see the header).
 async function skinning(browser) {
   const { tab, seen } = await open(browser);
@@ -173,6 +345,10 @@ async function skinning(browser) {
       if (!ok) problems.push(`${mesh} at ${what}: three.js and desal differ by ${worst} at vertex ${at}`);
     }
   }
+  problems.push(...(await framing(tab, state.times)));
+  problems.push(...(await morphs(tab, state.times[frame])));
+  if (options.textures) problems.push(...(await textures(tab, state.times[frame])));
+  await tab.evaluate((t) => void window.desalView.pose(t), state.times[frame]);
   if (options.screenshot) {
     await tab.screenshot({ path: options.screenshot });
     console.log(`screenshot of keyframe ${frame}: ${options.screenshot}`);

@@ -14,7 +14,7 @@
 //! | `hierarchy.png`, `upsampling-error.png`, `upsampling-error-<k>.ply` | with `[dataset.hierarchy]`: the levels side by side; the held-out per-vertex upsampling error of each level, fitted against barycentric (RMS, drawn and as PLY properties) |
 //! | `simplified.glb` (`.vrm` for a `.vrm`), `simplified-rig.json`, the images it names by URI | with `[dataset.rig]`: the simplified rig, the input document edited (`stages::rig::simplified_glb`), its figures, and its external images under their relative paths |
 //! | `model.npz`, `model.json` | with `[dataset.model]`: the simplified model in the input's keys and dtypes (an npz also for a `.pkl` input), its joint regressor solved on the kept vertices (`stages::model::simplified_model`), and what the solve and the landmarks did |
-//! | `view.html` | with `[dataset.rig]`: both rigs side by side in three.js, loaded from its pinned CDN URLs, or inlined from the package `DESAL_THREE` names (`viewer.rs`) |
+//! | `view.html` | with `[dataset.rig]`: the input and the simplified rig side by side in three.js with their materials and textures, a level selector and morph-target sliders; three.js loaded from its pinned CDN URLs, or inlined from the package `DESAL_THREE` names (`viewer.rs`) |
 //! | `report.json` | the run's report, with `outputs_key` |
 //! | `eval/` | `desal eval`'s, kept across runs |
 
@@ -35,8 +35,10 @@ use crate::stages::{Counts, DatasetStages};
 /// viewer's three.js from its CDN or `DESAL_THREE`, no `viewer/three/` copy. 4: a model
 /// dataset's `model.npz` and `model.json`; the simplified rig is the input document
 /// edited (every mesh, material, texture and extension kept; `simplified.vrm` for a
-/// `.vrm`), its external images beside it.
-pub const OUTPUTS_VERSION: u32 = 4;
+/// `.vrm`), its external images beside it. 5: `view.html` takes a list of levels, shows
+/// the input file's own `.glb` with its materials and textures, frames the whole body,
+/// has morph-target sliders.
+pub const OUTPUTS_VERSION: u32 = 5;
 
 /// `desal eval`'s folder inside a dataset's output folder: kept when `desal run` replaces
 /// the rest (it depends on the pipeline's inputs, not on the run's stage parameters).

@@ -2,13 +2,16 @@
 //! a three.js page (`desal_rig::viewer`), which loads the pinned three.js from its CDN, or
 //! inlines it from the local package `DESAL_THREE` names, for offline use.
 //!
-//! The full rig is the input as desal read it (the skinned mesh named by `rig.mesh`, its
-//! skeleton and animations), written by the one rig writer, `desal_rig::write_glb`: so
-//! the page shows exactly what desal posed, whatever else the input file holds, and a
-//! `.gltf` input with external buffers needs no second loader.
+//! The page's levels are the input, then `simplified.glb` (the lead passes a LOD chain's
+//! levels here later). The input level is the input file's own bytes when it is a binary
+//! glTF (`.glb`, `.vrm`): its materials, textures, every mesh and morph target, as
+//! `simplified.glb` (the input document, edited) has them. A `.gltf` (JSON, maybe with
+//! external buffers and images) is shown as desal read it instead (the skinned meshes, the
+//! skeleton and animations, without materials), written by the one rig writer,
+//! `desal_rig::write_glb`, so the page needs no second loader.
 
 use anyhow::{Context, Result};
-use desal_rig::viewer::{ViewInput, three_dir_from_env, view_html};
+use desal_rig::viewer::{ViewInput, ViewLevel, three_dir_from_env, view_html};
 use desal_rig::{ReadOptions, Weld};
 
 use crate::stages::rig::{RigSource, SimplifiedRigSummary};
@@ -22,8 +25,13 @@ pub fn view_files(
     simplified_glb: &[u8],
     summary: &SimplifiedRigSummary,
 ) -> Result<Vec<(String, Vec<u8>)>> {
-    let input = desal_rig::read_rig(&rig.file, &ReadOptions { mesh: rig.params.mesh.clone() })?;
-    let full_glb = desal_rig::write_glb(&input).with_context(|| format!("{}", rig.file.display()))?;
+    let bytes = desal_io::file::read_regular_file(&rig.file)?;
+    let input = desal_rig::read_rig_from(&rig.file, &bytes, &ReadOptions { mesh: rig.params.mesh.clone() })?;
+    let full_glb = if bytes.starts_with(b"glTF") {
+        bytes
+    } else {
+        desal_rig::write_glb(&input).with_context(|| format!("{}", rig.file.display()))?
+    };
     let title = crate::stages::ingest::file_name(&rig.file);
     let caption = format!(
         "{title}: {} welded vertices simplified to {}; weights: {}. Drag to turn, scroll to zoom.",
@@ -31,7 +39,11 @@ pub fn view_files(
         summary.simplified_vertices,
         summary.weights,
     );
-    let input = ViewInput { title: &title, full_glb: &full_glb, simplified_glb, caption: &caption };
+    let levels = [
+        ViewLevel { label: "input", glb: &full_glb },
+        ViewLevel { label: "simplified", glb: simplified_glb },
+    ];
+    let input = ViewInput { title: &title, levels: &levels, caption: &caption };
     let page = view_html(&input, three_dir_from_env().as_deref())?;
     Ok(vec![(VIEW_HTML.to_owned(), page.into_bytes())])
 }

@@ -1,8 +1,12 @@
-//! `view.html`: a page that shows the full and the simplified rig side by side in
-//! three.js, playing the animation in sync, with a wireframe toggle (`viewer/view.js`).
+//! `view.html`: a page that shows the input rig and a simplified level side by side in
+//! three.js, playing the animation in sync, with the documents' materials and textures, a
+//! level selector, a slider per morph target and a wireframe toggle (`viewer/view.js`).
+//!
+//! The page takes a list of levels ([`ViewInput::levels`]): the input first, then the
+//! simplified levels, finest first (one today; a LOD chain later). Each is a `.glb`.
 //!
 //! Chromium refuses ES-module imports and `fetch` from `file://`, and a user opens the
-//! page by double-clicking it. So both rigs go in the page, as base64 in a JSON
+//! page by double-clicking it. So every level goes in the page, as base64 in a JSON
 //! `<script>` block parsed by `GLTFLoader.parse` with no fetch, and three.js comes from
 //! one of two places; neither is desal's source tree (a library belongs in a package):
 //! - **By default, the network.** The import map names the pinned version's files on a
@@ -119,20 +123,29 @@ pub fn three_key(three: Option<&Path>) -> String {
 /// The page's own script.
 const VIEW_JS: &str = include_str!("../viewer/view.js");
 
+/// One level the page shows: a rig as a `.glb` and its name in the page.
+#[derive(Debug, Clone, Copy)]
+pub struct ViewLevel<'a> {
+    /// The level's name (`input`, `simplified`, `LOD 1`, ...).
+    pub label: &'a str,
+    /// The rig's `.glb` bytes (a whole document: its materials and textures are drawn).
+    pub glb: &'a [u8],
+}
+
 /// What the page shows.
 #[derive(Debug, Clone, Copy)]
 pub struct ViewInput<'a> {
     /// The page title (the dataset's name).
     pub title: &'a str,
-    /// The full rig as a `.glb` (left).
-    pub full_glb: &'a [u8],
-    /// The simplified rig as a `.glb` (right): the bytes of `simplified.glb`.
-    pub simplified_glb: &'a [u8],
+    /// The input rig (shown on the left), then at least one simplified level, finest
+    /// first (one at a time on the right, picked by the page's level selector).
+    pub levels: &'a [ViewLevel<'a>],
     /// One line under the two views.
     pub caption: &'a str,
 }
 
-/// The page (see the module doc). With `three` `None` it loads the pinned three.js from
+/// The page (see the module doc). [`RigError::Output`] when `input` has fewer than two
+/// levels (the input and a simplified one). With `three` `None` it loads the pinned three.js from
 /// the CDN (the network is needed to view it); with the folder of a local npm `three`
 /// package it inlines that package's files, after checking each against the pin
 /// ([`RigError::Three`] names a missing or different file and the version to install).
@@ -141,6 +154,12 @@ pub fn view_html(input: &ViewInput<'_>, three: Option<&Path>) -> Result<String, 
 }
 
 fn view_html_pinned(input: &ViewInput<'_>, three: Option<&Path>, pin: &ThreePin) -> Result<String, RigError> {
+    if input.levels.len() < 2 {
+        return Err(RigError::Output(format!(
+            "view.html needs the input and at least one simplified level, not {} level(s)",
+            input.levels.len()
+        )));
+    }
     let (import_map, licence, load_error) = match three {
         None => (
             cdn_import_map(pin),
@@ -165,11 +184,12 @@ fn view_html_pinned(input: &ViewInput<'_>, three: Option<&Path>, pin: &ThreePin)
             )
         }
     };
-    let data = serde_json::json!({
-        "full": base64(input.full_glb),
-        "simplified": base64(input.simplified_glb),
-        "caption": input.caption,
-    });
+    let levels: Vec<serde_json::Value> = input
+        .levels
+        .iter()
+        .map(|level| serde_json::json!({"label": level.label, "glb": base64(level.glb)}))
+        .collect();
+    let data = serde_json::json!({"levels": levels, "caption": input.caption});
     debug_assert!(!VIEW_JS.contains("</script"), "view.js must not close its script element");
     Ok(format!(
         r#"<!doctype html>
@@ -186,16 +206,22 @@ fn view_html_pinned(input: &ViewInput<'_>, three: Option<&Path>, pin: &ThreePin)
   #label-full {{ left: 0; }}
   #label-simplified {{ left: 50%; }}
   #bar {{ display: flex; gap: 1.2em; align-items: center; height: 3.2em; padding: 0 1em; box-sizing: border-box; }}
+  #bar label {{ white-space: nowrap; }}
+  #morphs {{ position: absolute; left: 0.6em; bottom: 3.8em; display: flex; flex-direction: column; gap: 0.2em;
+            padding: 0.4em 0.6em; font-size: 12px; background: rgba(244, 244, 242, 0.85); border-radius: 4px; }}
+  #morphs input {{ width: 7em; vertical-align: middle; }}
 </style>
 {licence}<script type="importmap">{import_map}</script>
 </head>
 <body>
-<div class="label" id="label-full">full (input)</div>
+<div class="label" id="label-full">input</div>
 <div class="label" id="label-simplified">simplified</div>
 <canvas id="canvas"></canvas>
+<div id="morphs" hidden></div>
 <div id="bar">
   <button id="play" type="button">pause</button>
   <label><input id="wireframe" type="checkbox"> wireframe</label>
+  <label>level <select id="level"></select></label>
   <span id="caption">loading...</span>
 </div>
 <script id="desal-data" type="application/json">{data}</script>
@@ -426,8 +452,34 @@ mod tests {
         ThreePin { version: "0.0.1".into(), cdn: "https://cdn.example/npm/".into(), files }
     }
 
-    const INPUT: ViewInput<'static> =
-        ViewInput { title: "a<b", full_glb: b"full", simplified_glb: b"simplified", caption: "</script>" };
+    const LEVELS: [ViewLevel<'static>; 2] =
+        [ViewLevel { label: "input", glb: b"full" }, ViewLevel { label: "simplified", glb: b"simplified" }];
+    const INPUT: ViewInput<'static> = ViewInput { title: "a<b", levels: &LEVELS, caption: "</script>" };
+
+    /// The page's data: every level, in order, its label and its bytes; a page of one
+    /// level is refused.
+    #[test]
+    fn the_page_takes_a_list_of_levels_input_first() {
+        let three = [
+            ViewLevel { label: "input", glb: b"a" },
+            ViewLevel { label: "LOD 1", glb: b"bb" },
+            ViewLevel { label: "LOD 2", glb: b"ccc" },
+        ];
+        let html = view_html(&ViewInput { title: "t", levels: &three, caption: "c" }, None).unwrap();
+        let opening = "<script id=\"desal-data\" type=\"application/json\">";
+        let start = html.find(opening).unwrap() + opening.len();
+        let end = start + html[start..].find("</script>").unwrap();
+        let data: serde_json::Value = serde_json::from_str(&html[start..end]).unwrap();
+        let levels: Vec<(&str, &str)> = data["levels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|l| (l["label"].as_str().unwrap(), l["glb"].as_str().unwrap()))
+            .collect();
+        assert_eq!(levels, [("input", "YQ=="), ("LOD 1", "YmI="), ("LOD 2", "Y2Nj")]);
+        let one = view_html(&ViewInput { title: "t", levels: &three[..1], caption: "c" }, None).unwrap_err();
+        assert!(one.to_string().contains("at least one simplified level"), "{one}");
+    }
 
     /// The JSON of the page's import map.
     fn import_map(html: &str) -> serde_json::Value {

@@ -13,8 +13,9 @@
 //!    (enough vertices).
 //!
 //! [`write_sample`] then writes `poses/<name>.ply` (binary little-endian, f32),
-//! `labels.json` and `labels.txt`. Output is deterministic: ordered maps only, fixed
-//! file contents, no timestamps.
+//! `labels.json`, `labels.txt`, `rig.glb` and `avatar.glb` ([`avatar`]: body, eyes and
+//! hair on one skin, textured, with face morph targets). Output is deterministic:
+//! ordered maps only, fixed file contents, no timestamps.
 //!
 //! [`smpl_layout::smpl_layout_model`] makes the same body into a CC0 body model in SMPL's
 //! layout (desal-bodymodel's fixture).
@@ -22,6 +23,7 @@
 //! Frame of the output: the OBJ's own — metres, **Y up**, the body facing **+Z**, its
 //! left side at **+X**; the template is pose 0 (`00_rest`, the base mesh's A pose).
 
+pub mod avatar;
 pub mod error;
 pub mod parts;
 pub mod poses;
@@ -81,6 +83,9 @@ pub struct Sample {
     pub labels: PartLabels,
     /// The same body as a skinned glTF rig whose animation's keyframes are the poses.
     pub rig: desal_rig::Rig,
+    /// The body with eyes, hair, textured materials, face morph targets and a short
+    /// animation, as one skinned glTF (`avatar.glb`, see [`avatar`]).
+    pub avatar: avatar::Avatar,
     pub report: SampleReport,
 }
 
@@ -171,7 +176,8 @@ pub fn generate(
         poses: &keyframes,
         scale: config.scale,
     })?;
-    let names = poses.iter().map(|p| p.name.clone()).collect();
+    let names: Vec<String> = poses.iter().map(|p| p.name.clone()).collect();
+    let avatar = avatar::build_avatar(assets, &rig, &names, config)?;
     let pose_set = PoseSet::try_new(names, posed_sets, body.faces.clone(), 0)?;
     let report = SampleReport {
         vertex_count: body.vertex_count(),
@@ -184,7 +190,7 @@ pub fn generate(
         rest_self_intersections: rest_intersections,
         poses: pose_reports,
     };
-    Ok(Sample { poses: pose_set, labels, rig, report })
+    Ok(Sample { poses: pose_set, labels, rig, avatar, report })
 }
 
 /// The body: vertices `0..body_vertex_count` of `base` and the faces that use only
@@ -251,7 +257,7 @@ fn ply_comments(pose: &str) -> Vec<String> {
 pub const RIG_FILE: &str = "rig.glb";
 
 /// Writes `sample` into `out_dir`: `poses/<name>.ply` per pose, `labels.json`,
-/// `labels.txt` and the rig `rig.glb`. Returns the written paths in that order. Files of poses no longer in
+/// `labels.txt`, the rig `rig.glb` and the avatar `avatar.glb`. Returns the written paths in that order. Files of poses no longer in
 /// the table are not removed.
 pub fn write_sample(out_dir: &Path, sample: &Sample) -> Result<Vec<PathBuf>, SampleError> {
     let mut written = Vec::new();
@@ -272,5 +278,8 @@ pub fn write_sample(out_dir: &Path, sample: &Sample) -> Result<Vec<PathBuf>, Sam
     let bytes = desal_rig::write_glb(&sample.rig).map_err(|e| SampleError::Rig(e.to_string()))?;
     desal_io::atomic::write_atomic(&glb, &bytes)?;
     written.push(glb);
+    let avatar = out_dir.join(avatar::AVATAR_FILE);
+    desal_io::atomic::write_atomic(&avatar, &sample.avatar.glb)?;
+    written.push(avatar);
     Ok(written)
 }

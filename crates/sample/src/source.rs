@@ -20,6 +20,14 @@ pub const BASE_MESH_FILE: &str = "base.obj";
 pub const RIG_FILE: &str = "rig.cmu_mb.json";
 pub const WEIGHTS_FILE: &str = "weights.cmu_mb.json";
 pub const GROUPS_FILE: &str = "basemesh_vertex_groups.json";
+/// The folder of the face units (`<name>.target` files).
+pub const FACE_UNITS_DIR: &str = "faceunits";
+
+/// The face units the avatar sample carries as morph targets, in target order: the
+/// file names in [`FACE_UNITS_DIR`] (MakeHuman's ARKit-named `faceunits01`) and the names
+/// in the avatar's `extras.targetNames`.
+pub const FACE_UNITS: [&str; 5] =
+    ["eyeBlinkLeft", "eyeBlinkRight", "jawOpen", "mouthSmileLeft", "mouthSmileRight"];
 
 /// Where a joint (a bone's head or tail) sits in the rest pose.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -54,6 +62,9 @@ pub struct SourceAssets {
     pub groups: BTreeMap<String, Vec<[u32; 2]>>,
     /// The base mesh's texture coordinates and the UV corners of its triangles.
     pub uvs: ObjUvs,
+    /// Face units ([`FACE_UNITS`]): name → `(base-mesh vertex, delta)` in file order, in
+    /// OBJ units.
+    pub face_units: BTreeMap<String, Vec<(u32, [f64; 3])>>,
 }
 
 impl SourceAssets {
@@ -64,7 +75,12 @@ impl SourceAssets {
         let rig = parse_rig(&read_text(&dir.join(RIG_FILE))?, &dir.join(RIG_FILE))?;
         let weights = parse_weights(&read_text(&dir.join(WEIGHTS_FILE))?, &dir.join(WEIGHTS_FILE))?;
         let groups = parse_groups(&read_text(&dir.join(GROUPS_FILE))?, &dir.join(GROUPS_FILE))?;
-        Ok(Self { base, rig, weights, groups, uvs })
+        let mut face_units = BTreeMap::new();
+        for name in FACE_UNITS {
+            let path = dir.join(FACE_UNITS_DIR).join(format!("{name}.target"));
+            face_units.insert(name.to_owned(), parse_target(&read_text(&path)?, &path)?);
+        }
+        Ok(Self { base, rig, weights, groups, uvs, face_units })
     }
 
     /// The base-mesh vertex indices of group `name`, ascending as listed (`None` when
@@ -136,6 +152,32 @@ pub fn parse_weights(text: &str, path: &Path) -> Result<BTreeMap<String, Vec<(u3
 /// ...]`, inclusive ranges).
 pub fn parse_groups(text: &str, path: &Path) -> Result<BTreeMap<String, Vec<[u32; 2]>>, SampleError> {
     serde_json::from_str(text).map_err(|e| json_error(path, e))
+}
+
+/// Parses a MakeHuman target file: one `vertex dx dy dz` line per moved vertex (OBJ
+/// units); `#` lines are comments.
+pub fn parse_target(text: &str, path: &Path) -> Result<Vec<(u32, [f64; 3])>, SampleError> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        let parsed = match fields.as_slice() {
+            [v, x, y, z] => v.parse::<u32>().ok().zip(
+                [x, y, z]
+                    .iter()
+                    .map(|f| f.parse::<f64>().ok().filter(|d| d.is_finite()))
+                    .collect::<Option<Vec<_>>>(),
+            ),
+            _ => None,
+        };
+        let (v, d) =
+            parsed.ok_or_else(|| json_error(path, format!("line {}: expected `vertex dx dy dz`", i + 1)))?;
+        out.push((v, [d[0], d[1], d[2]]));
+    }
+    Ok(out)
 }
 
 /// The source folder shipped in this repository (`data-samples/source`), located from

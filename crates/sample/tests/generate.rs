@@ -187,3 +187,63 @@ fn the_committed_rig_welds_to_the_template_and_its_keyframes_are_the_poses() {
         assert!((p - q).norm() < 1e-6);
     }
 }
+
+/// The committed avatar as desal reads it: three meshes on one skin, in node order, at
+/// most 4 influences, the body welding to the template's 13380 vertices, the face units
+/// named, the textures PNG, and under 2 MB.
+#[test]
+fn the_avatar_is_three_textured_meshes_on_one_skin() {
+    let path = data_samples().join(desal_sample::avatar::AVATAR_FILE);
+    let bytes = std::fs::read(&path).unwrap();
+    assert!(bytes.len() < 2_000_000, "{} bytes", bytes.len());
+    let options = desal_rig::ReadOptions::default();
+    let (rig, document) = desal_rig::read_rig_and_document(&path, &bytes, &options).unwrap();
+    let names: Vec<&str> = rig.meshes.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["Body", "Eyes", "Hair"]);
+    assert!(rig.meshes.iter().all(|m| m.skin == Some(0)), "one shared skin");
+    assert!(rig.mesh.influences.max_influences() <= 4);
+    let body_options = desal_rig::ReadOptions { mesh: Some("Body".into()) };
+    let body = desal_rig::read_rig_from(&path, &bytes, &body_options).unwrap();
+    assert_eq!(desal_rig::Weld::new(&body.mesh).welded_count(), 13380, "the body welds to the template");
+    let json = document.json();
+    assert_eq!(
+        json["meshes"][0]["extras"]["targetNames"],
+        serde_json::json!(desal_sample::source::FACE_UNITS)
+    );
+    for image in json["images"].as_array().unwrap() {
+        let view = &json["bufferViews"][image["bufferView"].as_u64().unwrap() as usize];
+        assert_eq!(image["mimeType"], "image/png", "{view}");
+    }
+    assert_eq!(json["materials"].as_array().unwrap().len(), 3);
+    let wave = &rig.animations[0];
+    assert_eq!(wave.name.as_deref(), Some("wave"));
+    assert_eq!(wave.channels[0].times, [0.0, 1.0, 2.0, 3.0]);
+}
+
+/// The blink of the left eye moves the left side of the face (the frame's +X: 89% of its
+/// total displacement, the rest near the nose), the right blink the right side, and both
+/// only the upper face: the face units are in the body's own frame and index space.
+#[test]
+fn the_left_blink_moves_the_left_eyelids() {
+    let body = desal_sample::extract_body(&assets().base, 13380).unwrap();
+    let left_share = |unit: &str| {
+        let on_body: Vec<_> = assets().face_units[unit].iter().filter(|(v, _)| *v < 13380).collect();
+        assert!(on_body.len() > 500, "{unit}: {} body vertices", on_body.len());
+        let (mut left, mut total) = (0.0, 0.0);
+        for (v, d) in on_body {
+            let p = body.positions[*v as usize];
+            assert!(p.y > 6.5, "{unit}: vertex {v} at {p:?} is below the eyes");
+            let length = desal_mesh::Vec3::from(*d).norm();
+            total += length;
+            if p.x > 0.0 {
+                left += length;
+            }
+        }
+        left / total
+    };
+    assert!(left_share("eyeBlinkLeft") > 0.85, "{}", left_share("eyeBlinkLeft"));
+    assert!(left_share("eyeBlinkRight") < 0.15, "{}", left_share("eyeBlinkRight"));
+    let report = &sample().avatar.report;
+    assert_eq!(report.targets[0], ("eyeBlinkLeft".to_owned(), 747));
+    assert_eq!(report.meshes.iter().map(|m| m.0.as_str()).collect::<Vec<_>>(), ["Body", "Eyes", "Hair"]);
+}

@@ -194,6 +194,7 @@ fn rig_errors_name_the_bone() {
         weights: BTreeMap::new(),
         groups: [("joint-a".to_owned(), vec![[0, 0]])].into(),
         uvs: desal_sample::rig::ObjUvs { uvs: vec![], triangles: vec![], vertex_triangles: vec![] },
+        face_units: BTreeMap::new(),
     };
     let err =
         Skeleton::from_assets(&assets(&format!("{{{}, {}}}", one("a", ""), one("b", "zz")))).unwrap_err();
