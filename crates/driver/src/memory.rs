@@ -204,6 +204,7 @@ pub fn simplify_rig(
     let set = ingest.body.to_pose_set().with_context(|| format!("{}", file.display()))?;
     let labels = input.compute_labels(&set)?;
     let part_labels = labels.body.to_labels().with_context(|| format!("{}", file.display()))?;
+    let part_labels = input.to_owned().with_part_tree(part_labels)?;
     let seams = if params.simplify.keeps_seams() {
         Some(crate::stages::seams::rig_seam_edges(&input, set.vertex_count())?)
     } else {

@@ -51,7 +51,7 @@ pub use model::{
     Animation, Channel, Influences, Interpolation, LocalTransform, Node, PrimitiveSpan, Rig, Skin,
     SkinnedMesh,
 };
-pub use parts::{PartsConfig, dominant_joint_parts};
+pub use parts::{PartsConfig, dominant_joint_parts, with_part_tree};
 pub use pose::{
     Frame, FrameConfig, MAX_FRAMES, MAX_POSE_NODES, MAX_POSE_VERTICES, PoseSource, joint_matrices,
     sample_frames, skin_points,

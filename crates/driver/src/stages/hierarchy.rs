@@ -322,6 +322,7 @@ fn level_pose_set<'a>(
     let labels = PartLabels {
         labels: p.coarse_to_orig.iter().map(|&o| labels.labels[o as usize]).collect(),
         names: labels.names.clone(),
+        parents: labels.parents.clone(),
     };
     Ok((Cow::Owned(set), Cow::Owned(labels)))
 }

@@ -102,9 +102,16 @@ impl DatasetStages {
         get_or_try_init(&self.pose_set, || Ok(self.poses.body()?.to_pose_set()?))
     }
 
-    /// The part labels, decoded on first use.
+    /// The part labels, decoded on first use; a rig's with its joints' tree
+    /// ([`rig::RigSource::with_part_tree`]).
     pub fn part_labels(&self) -> Result<&PartLabels> {
-        get_or_try_init(&self.part_labels, || Ok(self.labels.body()?.to_labels()?))
+        get_or_try_init(&self.part_labels, || {
+            let labels = self.labels.body()?.to_labels()?;
+            match &self.rig {
+                Some(rig) => rig.with_part_tree(labels),
+                None => Ok(labels),
+            }
+        })
     }
 
     /// Input and output counts, from the stages' summaries (no body is decoded).
@@ -173,8 +180,17 @@ pub fn run_stages(
         ),
     };
     let labels_cell = OnceCell::new();
-    let part_labels =
-        || -> Result<&PartLabels> { get_or_try_init(&labels_cell, || Ok(labels.body()?.to_labels()?)) };
+    // A rig's labels carry its joints' tree, so that a part simplification leaves
+    // unfittable joins its parent (issue 42, item 8).
+    let part_labels = || -> Result<&PartLabels> {
+        get_or_try_init(&labels_cell, || {
+            let decoded = labels.body()?.to_labels()?;
+            match &inputs.rig {
+                Some(rig) => rig.to_owned().with_part_tree(decoded),
+                None => Ok(decoded),
+            }
+        })
+    };
 
     // Stages 1–4, written once (`chain.rs`); stage 3 keeps a rig's attribute seams as
     // polylines unless told to ignore them.

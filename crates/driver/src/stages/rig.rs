@@ -172,6 +172,16 @@ pub struct RigSource {
     pub params: RigParams,
 }
 
+impl RigSource {
+    /// `labels`, this rig's dominant-joint parts (as a labels artifact stores them),
+    /// with their joints' tree (`desal_rig::with_part_tree`): a part a simplification
+    /// leaves without three non-collinear vertices then joins its parent joint's part.
+    pub fn with_part_tree(&self, labels: desal_mesh::PartLabels) -> Result<desal_mesh::PartLabels> {
+        let rig = desal_rig::read_rig(&self.file, &ReadOptions { mesh: self.params.mesh.clone() })?;
+        Ok(desal_rig::with_part_tree(&rig, labels))
+    }
+}
+
 impl RigInput<'_> {
     pub fn to_owned(&self) -> RigSource {
         RigSource { file: self.file.to_owned(), params: self.params.clone() }
