@@ -50,10 +50,13 @@ pub enum RigParts {
 pub struct RigParams {
     /// The `.glb` or `.gltf` file (relative to the pipeline file).
     pub file: String,
-    /// One skinned mesh, by mesh or node name; unset: every skinned mesh of the file (a
-    /// mesh carried by several nodes once), simplified together.
-    #[serde(default)]
-    pub mesh: Option<String>,
+    /// The meshes to simplify, `"A"` or `["A", "B"]`, each by mesh name, node name or
+    /// mesh index (skinned, or below a bone); the others pass through unchanged. Unset:
+    /// every skinned mesh of the file (a mesh carried by several nodes once) and every
+    /// mesh below a bone. One name is written back as a string, so keys made before
+    /// lists existed still match.
+    #[serde(default, deserialize_with = "one_or_many", serialize_with = "one_or_many_out")]
+    pub mesh: Option<Vec<String>>,
     /// Where the frames come from. Default `animations`.
     #[serde(default)]
     pub poses: PosesFrom,
@@ -101,6 +104,35 @@ pub enum AllInfluences {
 /// Influences per vertex of the simplified rig when `max_influences` is unset (issue 42,
 /// item 5): engines skin 4.
 pub const DEFAULT_MAX_INFLUENCES: usize = 4;
+
+/// `mesh = "A"` or `mesh = ["A", "B"]`.
+fn one_or_many<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> std::result::Result<Option<Vec<String>>, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum OneOrMany {
+        One(String),
+        Many(Vec<String>),
+    }
+    // `null` (a producer record of no `mesh`) is none.
+    Ok(Option::<OneOrMany>::deserialize(deserializer)?.map(|names| match names {
+        OneOrMany::One(name) => vec![name],
+        OneOrMany::Many(names) => names,
+    }))
+}
+
+/// [`RigParams::mesh`] as written: one name as a string, several as a list.
+fn one_or_many_out<S: serde::Serializer>(
+    mesh: &Option<Vec<String>>,
+    serializer: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    match mesh.as_deref() {
+        Some([one]) => serializer.serialize_some(one),
+        Some(many) => serializer.serialize_some(many),
+        None => serializer.serialize_none(),
+    }
+}
 
 fn default_frames() -> usize {
     FrameConfig::default().frames
@@ -494,7 +526,8 @@ mod tests {
         let reference = key(&a, &base);
         assert_eq!(key(&b, &base), reference, "the same bytes under another name");
         let variants = [
-            RigParams { mesh: Some("Body".into()), ..base.clone() },
+            RigParams { mesh: Some(vec!["Body".into()]), ..base.clone() },
+            RigParams { mesh: Some(vec!["Body".into(), "Eyes".into()]), ..base.clone() },
             RigParams { poses: PosesFrom::Random, ..base.clone() },
             RigParams { frames: 61, ..base.clone() },
             RigParams { seed: 1, ..base.clone() },
@@ -527,6 +560,18 @@ mod tests {
                 .is_err()
         );
         assert_eq!(p.weight_options().unwrap().max_influences, Some(4), "engines skin 4");
+        let one: RigParams = toml::from_str("file = \"a.glb\"\nmesh = \"Body\"").unwrap();
+        assert_eq!(one.mesh, Some(vec!["Body".to_owned()]));
+        assert_eq!(
+            serde_json::to_value(&one).unwrap()["mesh"],
+            "Body",
+            "one name is written as before lists"
+        );
+        let two: RigParams = toml::from_str("file = \"a.glb\"\nmesh = [\"Body\", \"2\"]").unwrap();
+        assert_eq!(serde_json::to_value(&two).unwrap()["mesh"], serde_json::json!(["Body", "2"]));
+        let none: RigParams = serde_json::from_str(r#"{"file": "a.glb", "mesh": null}"#).unwrap();
+        assert_eq!(none.mesh, None, "a producer record without mesh");
+        assert!(toml::from_str::<RigParams>("file = \"a.glb\"\nmesh = 3").is_err());
         let all: RigParams = toml::from_str("file = \"a.glb\"\nmax_influences = \"all\"").unwrap();
         assert_eq!(all.weight_options().unwrap().max_influences, None);
         let eight: RigParams = toml::from_str("file = \"a.glb\"\nmax_influences = 8").unwrap();
