@@ -519,6 +519,162 @@ fn issue_42_every_skinned_mesh_is_simplified_with_a_table_of_its_vertices() {
     assert_eq!(report["input"]["vertices"], 13380, "mesh = \"Body\" picks one");
 }
 
+/// The rig sample as a small avatar: its body with a material and a morph target
+/// (`raise`, every vertex moved 1 cm up, default weight 0) and a second skinned mesh
+/// (`Copy`, a copy of the body on the same accessors, as a second garment would be).
+fn two_mesh_avatar() -> Vec<u8> {
+    let input = std::fs::read(sample_rig()).unwrap();
+    let glb = gltf::binary::Glb::from_slice(&input).unwrap();
+    let mut json: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
+    let mut bin = glb.bin.unwrap().into_owned();
+    let position = json["meshes"][0]["primitives"][0]["attributes"]["POSITION"].as_u64().unwrap() as usize;
+    let count = json["accessors"][position]["count"].as_u64().unwrap() as usize;
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let offset = bin.len();
+    for _ in 0..count {
+        for x in [0.0f32, 0.01, 0.0] {
+            bin.extend(x.to_le_bytes());
+        }
+    }
+    let views = json["bufferViews"].as_array_mut().unwrap();
+    views.push(serde_json::json!({"buffer": 0, "byteOffset": offset, "byteLength": 12 * count}));
+    let view = views.len() - 1;
+    let accessors = json["accessors"].as_array_mut().unwrap();
+    accessors.push(serde_json::json!({
+        "bufferView": view, "componentType": 5126, "count": count, "type": "VEC3",
+        "min": [0.0, 0.01, 0.0], "max": [0.0, 0.01, 0.0]
+    }));
+    let delta = accessors.len() - 1;
+    json["buffers"][0]["byteLength"] = bin.len().into();
+    json["meshes"][0]["primitives"][0]["targets"] = serde_json::json!([{"POSITION": delta}]);
+    json["meshes"][0]["primitives"][0]["material"] = 0.into();
+    json["meshes"][0]["weights"] = serde_json::json!([0.0]);
+    json["meshes"][0]["extras"] = serde_json::json!({"targetNames": ["raise"]});
+    json["materials"] = serde_json::json!([{"name": "skin", "pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.6, 0.5, 1.0]}}]);
+    let mut copy = json["meshes"][0].clone();
+    copy["name"] = "Copy".into();
+    json["meshes"].as_array_mut().unwrap().push(copy);
+    let skinned = json["nodes"].as_array().unwrap().iter().position(|n| n.get("skin").is_some()).unwrap();
+    let mut node = json["nodes"][skinned].clone();
+    node["name"] = "copy".into();
+    node["mesh"] = 1.into();
+    json["nodes"].as_array_mut().unwrap().push(node);
+    let last = json["nodes"].as_array().unwrap().len() - 1;
+    json["scenes"][0]["nodes"].as_array_mut().unwrap().push(last.into());
+    let json = serde_json::to_vec(&json).unwrap();
+    gltf::binary::Glb { header: glb.header, json: json.into(), bin: Some(bin.into()) }.to_vec().unwrap()
+}
+
+/// The document of a written `.glb`.
+fn document(path: &Path) -> serde_json::Value {
+    let bytes = std::fs::read(path).unwrap();
+    serde_json::from_slice(&gltf::binary::Glb::from_slice(&bytes).unwrap().json).unwrap()
+}
+
+/// The bit patterns of a rig's vertex positions.
+fn position_set(rig: &Rig) -> HashSet<[u32; 3]> {
+    rig.mesh.positions.iter().map(|p| p.map(f32::to_bits)).collect()
+}
+
+/// Issue 42, item 6: `lods = [0.5, 0.25, 0.1]` writes one rig per level, each the input
+/// document with every mesh, material, morph target (and its name), skin and animation,
+/// each level's faces near its fraction of the original's and its vertices among the
+/// level before's (the levels nest); `simplified-lods.glb` holds the input and every
+/// level as `MSFT_lod` levels of each simplified mesh's node; `simplified.glb` is still
+/// written; `simplified-rig.json` reports each level.
+#[test]
+fn issue_42_a_lod_chain_nests_and_keeps_every_mesh_material_and_morph_target() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline =
+        write_rig_pipeline(dir.path(), &two_mesh_avatar(), "target_vertices = 5352\nplacement = \"subset\"");
+    with_rig_setting(&pipeline, "lods = [0.5, 0.25, 0.1]");
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let folder = dir.path().join("out/avatar");
+    let input = document(&dir.path().join("avatar.glb"));
+    let original = read(&dir.path().join("avatar.glb"));
+    let original_faces = original.mesh.triangles.len();
+    assert!(folder.join("simplified.glb").exists());
+    let figures: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(folder.join("simplified-rig.json")).unwrap()).unwrap();
+    let lods = figures["lods"].as_array().unwrap();
+    assert_eq!(lods.len(), 3, "{figures}");
+    let mut above = position_set(&original);
+    for (k, fraction) in [0.5, 0.25, 0.1].into_iter().enumerate() {
+        let file = folder.join(format!("simplified-lod{}.glb", k + 1));
+        let json = document(&file);
+        for key in ["materials", "skins", "animations", "scenes"] {
+            assert_eq!(json[key], input[key], "level {}: {key}", k + 1);
+        }
+        assert_eq!(json["meshes"].as_array().unwrap().len(), 2);
+        for (m, mesh) in json["meshes"].as_array().unwrap().iter().enumerate() {
+            assert_eq!(mesh["extras"], input["meshes"][m]["extras"], "target names");
+            assert_eq!(mesh["primitives"][0]["targets"].as_array().unwrap().len(), 1);
+            assert_eq!(mesh["primitives"][0]["material"], 0);
+        }
+        let level = read(&file);
+        assert_eq!(level.meshes.len(), 2);
+        let faces = level.mesh.triangles.len();
+        let target = (fraction * original_faces as f64).round();
+        assert!(
+            (faces as f64 - target).abs() <= 0.02 * target,
+            "level {}: {faces} faces for {target}",
+            k + 1
+        );
+        assert_eq!(lods[k]["output_faces"], faces, "{figures}");
+        assert_eq!(lods[k]["file"], format!("simplified-lod{}.glb", k + 1));
+        let here = position_set(&level);
+        assert!(here.is_subset(&above), "level {} nests in the level before", k + 1);
+        above = here;
+    }
+
+    let json = document(&folder.join("simplified-lods.glb"));
+    assert!(json["extensionsUsed"].as_array().unwrap().iter().any(|e| e == "MSFT_lod"));
+    assert_eq!(json["meshes"].as_array().unwrap().len(), 2 + 2 * 3);
+    for (node, name) in
+        [(&json["nodes"][original.meshes[0].node], "Body"), (&json["nodes"][original.meshes[1].node], "Copy")]
+    {
+        let ids = node["extensions"]["MSFT_lod"]["ids"].as_array().unwrap();
+        assert_eq!(ids.len(), 3);
+        assert_eq!(node["extras"]["MSFT_screencoverage"].as_array().unwrap().len(), 4);
+        assert_eq!(json["meshes"][node["mesh"].as_u64().unwrap() as usize]["name"], format!("{name}_LOD0"));
+        for (k, id) in ids.iter().enumerate() {
+            let lod = &json["nodes"][id.as_u64().unwrap() as usize];
+            assert_eq!(lod["skin"], node["skin"]);
+            let mesh = &json["meshes"][lod["mesh"].as_u64().unwrap() as usize];
+            assert_eq!(mesh["name"], format!("{name}_LOD{}", k + 1));
+            assert_eq!(mesh["extras"]["targetNames"], serde_json::json!(["raise"]));
+        }
+    }
+}
+
+/// Issue 42, item 6: `lods` not strictly decreasing or outside (0, 1] is refused when
+/// the pipeline is read, naming the file, the dataset and the key; nothing is written.
+#[test]
+fn issue_42_bad_lods_are_refused_naming_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = std::fs::read(sample_rig()).unwrap();
+    let pipeline = write_rig_pipeline(dir.path(), &input, "target_vertices = 2676");
+    let text = std::fs::read_to_string(&pipeline).unwrap();
+    for (lods, expected) in [
+        ("[0.5, 0.5]", "rig.lods must be strictly decreasing"),
+        ("[0.25, 0.5]", "lods[1] = 0.5 follows 0.25"),
+        ("[1.5]", "rig.lods[0] = 1.5 is not a fraction"),
+        ("[0.5, 0.0]", "rig.lods[1] = 0 is not a fraction"),
+        ("[]", "rig.lods is empty"),
+    ] {
+        std::fs::write(&pipeline, text.replace("frames = 11", &format!("frames = 11\nlods = {lods}")))
+            .unwrap();
+        let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+        assert!(!out.status.success(), "{lods}");
+        let err = stderr(&out);
+        assert!(err.contains(expected) && err.contains("rig.toml"), "{lods}: {err}");
+        assert!(!dir.path().join("out").exists(), "nothing written");
+    }
+}
+
 /// Issue 42, item 8: with a rig's dominant-joint labels, a part that simplification
 /// leaves without three non-collinear vertices joins its parent joint's part instead of
 /// failing the run. `desal-refit` fits its pose model on the simplified parts; at 300

@@ -319,6 +319,7 @@ fn check_parameters(spec: &DatasetToml, pose_files: &[PathBuf]) -> Result<()> {
         rig.frame_config()?;
         rig.weight_options()?;
         rig.parts_config()?;
+        rig.lod_fractions()?;
     }
     if let Some(model) = &spec.model {
         model.config()?;

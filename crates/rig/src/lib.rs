@@ -45,7 +45,7 @@ pub mod write;
 use desal_mesh::math::Mat4;
 use desal_mesh::{PoseSet, Vec3};
 
-pub use edit::{EditedGlb, ExternalImage, SourceDocument, write_edited};
+pub use edit::{EditedGlb, ExternalImage, MSFT_LOD, SourceDocument, write_edited, write_lods};
 pub use error::RigError;
 pub use model::{
     Animation, Channel, Influences, Interpolation, LocalTransform, Node, PrimitiveSpan, Rig, Skin,

@@ -10,6 +10,7 @@ pub mod chain;
 pub mod fit;
 pub mod hierarchy;
 pub mod ingest;
+pub mod lods;
 pub mod map;
 pub mod model;
 pub mod parts;
@@ -80,6 +81,9 @@ pub struct DatasetStages {
     pub map: Staged<MapV1, MapSummary>,
     /// One per coarse level, level 1 first (empty without `[dataset.hierarchy]`).
     pub hierarchy: Vec<Staged<HierarchyLevelV1, LevelSummary>>,
+    /// A rig's LOD chain (`lods` in `[dataset.rig]`), level 1 first: each level's map
+    /// into the pose set (empty without one).
+    pub lods: Vec<Staged<desal_io::artifact::MapV1, lods::LodSummary>>,
     /// The rig the poses came from, for a `[dataset.rig]` dataset (`simplified.glb`).
     pub rig: Option<rig::RigSource>,
     /// The model the poses came from, for a `[dataset.model]` dataset (`model.npz`).
@@ -219,8 +223,18 @@ pub fn run_stages(
         None => Vec::new(),
     };
 
+    // A rig's LOD chain: one stage per level, each from the level before.
+    let lod_levels = match &inputs.rig {
+        Some(rig) if rig.params.lods.is_some() => {
+            let settings = lods::LodSettings { chain: settings, fractions: rig.params.lod_fractions()? };
+            lods::lod_levels(runner, &settings, &input, poses.summary.faces, progress)?
+        }
+        _ => Vec::new(),
+    };
+
     Ok(DatasetStages {
         hierarchy,
+        lods: lod_levels,
         rig: inputs.rig.map(|r| r.to_owned()),
         model: inputs.model.map(|m| m.to_owned()),
         poses,

@@ -84,6 +84,13 @@ pub struct RigParams {
     /// existed still match (it shapes the output only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_influences: Option<MaxInfluences>,
+    /// A LOD chain: each level's fraction of the original faces, strictly decreasing, in
+    /// (0, 1] (`stages::lods`). Each level is simplified from the one before (subset
+    /// placement, so they nest) and written as `simplified-lod<k>.glb`, all of them with
+    /// the input as `simplified-lods.glb` (`MSFT_lod`). Unset: no chain. Left out of the
+    /// key's parameters when unset, as `max_influences`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lods: Option<Vec<f64>>,
 }
 
 /// `max_influences = N | "all"`.
@@ -180,6 +187,18 @@ impl RigParams {
             Some(MaxInfluences::All(_)) => None,
         };
         Ok(desal_rig::WeightOptions { max_influences })
+    }
+
+    /// The LOD chain's fractions, checked (`stages::lods::check_fractions`); empty
+    /// without `lods`.
+    pub fn lod_fractions(&self) -> Result<&[f64]> {
+        match &self.lods {
+            Some(lods) => {
+                crate::stages::lods::check_fractions(lods)?;
+                Ok(lods)
+            }
+            None => Ok(&[]),
+        }
     }
 
     pub fn parts_config(&self) -> Result<desal_rig::PartsConfig> {
@@ -370,6 +389,101 @@ pub fn source_of_pose_set(producer: &Producer, poses: &Path, file: &Path) -> Res
     Ok(RigSource { file: file.to_owned(), params })
 }
 
+/// A LOD chain's files: each level's rig (`simplified-lod<k>.glb`), all levels with the
+/// input in one (`simplified-lods.glb`, `MSFT_lod`), and each level's figures.
+#[derive(Debug, Clone)]
+pub struct LodGlbs {
+    pub levels: Vec<EditedGlb>,
+    pub combined: EditedGlb,
+    pub figures: Vec<LodFigures>,
+}
+
+/// One row of [`SimplifiedRigSummary::lods`]: the level's stage figures and its rig's.
+#[derive(Debug, Clone, Serialize)]
+pub struct LodFigures {
+    #[serde(flatten)]
+    pub level: crate::stages::lods::LodSummary,
+    /// `simplified-lod<k>.glb` (`.vrm` for a `.vrm`).
+    pub file: String,
+    /// Vertices and faces of the written primitives (seam copies included).
+    pub output_vertices: usize,
+    pub output_faces: usize,
+    pub seam_vertices: usize,
+    pub cross_chart_faces: usize,
+    /// `MSFT_screencoverage` of the level in `simplified-lods.glb`.
+    pub screen_coverage: f64,
+}
+
+/// The screen coverage (share of the screen) down to which each level of
+/// `simplified-lods.glb` is shown, the input first: level `k` until the coverage falls
+/// below half the next level's face fraction, so that the faces per screen area stay
+/// about even; the coarsest level is never culled (0). A starting point for engines that
+/// read `MSFT_screencoverage` (Babylon.js); they tune their own.
+pub fn screen_coverage(fractions: &[f64]) -> Vec<f64> {
+    let mut coverage: Vec<f64> = fractions.iter().map(|f| 0.5 * f).collect();
+    coverage.push(0.0);
+    coverage
+}
+
+/// The file name of LOD level `level` (`simplified-lod<k>`) or of the chain (`None`:
+/// `simplified-lods`), with the input's extension (`.vrm` for a `.vrm`).
+pub fn lod_file_name(source: &RigSource, level: Option<usize>) -> String {
+    let extension = simplified_file_name(source).rsplit('.').next().unwrap_or("glb");
+    match level {
+        Some(k) => format!("simplified-lod{k}.{extension}"),
+        None => format!("simplified-lods.{extension}"),
+    }
+}
+
+/// The rigs of a LOD chain (`levels`: each level's map into the pose set, finest
+/// first, with its summary): one edited document per level and the chain in one, each
+/// level's weights exact (subset placement) and capped at `max_influences`.
+pub fn lod_glbs(
+    source: &RigSource,
+    levels: &[(&MapV1, &crate::stages::lods::LodSummary)],
+) -> Result<LodGlbs> {
+    let input = RigInput { file: &source.file, params: &source.params };
+    let options = source.params.weight_options()?;
+    let (rig, document, posed) = input.load_with_document()?;
+    let template = posed.poses.template_positions();
+    let mut rigs = Vec::with_capacity(levels.len());
+    let mut files = Vec::with_capacity(levels.len());
+    let mut figures = Vec::with_capacity(levels.len());
+    let fractions: Vec<f64> = levels.iter().map(|(_, s)| s.fraction).collect();
+    let coverage = screen_coverage(&fractions);
+    for (k, (map, summary)) in levels.iter().enumerate() {
+        let simplified = SimplifiedV1 {
+            positions: map.simp_to_orig.iter().map(|&o| template[o as usize].into()).collect(),
+            faces: map.faces.clone(),
+            simp_to_orig: map.simp_to_orig.iter().map(|&o| Some(o)).collect(),
+            placement: "subset".into(),
+            input_vertices: template.len() as u32,
+            input_faces: posed.poses.faces.len() as u32,
+            collapses: 0,
+            stop: summary.stop.clone(),
+            max_error: summary.max_error,
+            mean_error: f64::NAN,
+            edge_length_mean: f64::NAN,
+            edge_length_variance: f64::NAN,
+        };
+        let (out, report) = simplified_rig(&rig, &posed, &simplified, map, &options)
+            .with_context(|| format!("LOD level {}", k + 1))?;
+        files.push(desal_rig::write_edited(&document, &rig, &out)?);
+        figures.push(LodFigures {
+            level: (*summary).clone(),
+            file: lod_file_name(source, Some(k + 1)),
+            output_vertices: report.output_vertices,
+            output_faces: report.output_faces,
+            seam_vertices: report.seam_vertices,
+            cross_chart_faces: report.cross_chart_faces,
+            screen_coverage: coverage[k + 1],
+        });
+        rigs.push(out);
+    }
+    let combined = desal_rig::write_lods(&document, &rig, &rigs, &coverage)?;
+    Ok(LodGlbs { levels: files, combined, figures })
+}
+
 /// `simplified.glb`'s JSON sidecar (`simplified-rig.json`).
 #[derive(Debug, Clone, Serialize)]
 pub struct SimplifiedRigSummary {
@@ -386,6 +500,9 @@ pub struct SimplifiedRigSummary {
     /// (`poses.dsa`), the simplified pose set (`simplified/*.ply`, `vertex_map.txt`) and
     /// the written mesh, as `[first, end)` ranges.
     pub meshes: Vec<MeshRanges>,
+    /// The LOD chain's levels (`lods`), finest first; absent without one.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub lods: Vec<LodFigures>,
 }
 
 /// One row of [`SimplifiedRigSummary::meshes`].
@@ -461,6 +578,7 @@ pub fn simplified_glb(
         refitted_vertices: report.refitted_vertices,
         max_influences: report.max_influences,
         meshes: mesh_ranges(&rig, &posed.weld, map, &out),
+        lods: Vec::new(),
     };
     Ok((edited, summary))
 }
@@ -528,6 +646,7 @@ mod tests {
         let variants = [
             RigParams { mesh: Some(vec!["Body".into()]), ..base.clone() },
             RigParams { mesh: Some(vec!["Body".into(), "Eyes".into()]), ..base.clone() },
+            RigParams { lods: Some(vec![0.5]), ..base.clone() },
             RigParams { poses: PosesFrom::Random, ..base.clone() },
             RigParams { frames: 61, ..base.clone() },
             RigParams { seed: 1, ..base.clone() },
