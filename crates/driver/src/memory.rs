@@ -153,7 +153,7 @@ pub fn simplify_pose_set(
     labels: &PartLabels,
     progress: &dyn Progress,
 ) -> Result<Simplification> {
-    simplify_with_seams(params, set, labels, None, progress)
+    simplify_with_seams(params, set, labels, None, None, progress)
 }
 
 /// [`simplify_pose_set`] with the template's attribute seams handed to stage 3 (a rig's,
@@ -163,9 +163,10 @@ fn simplify_with_seams(
     set: &PoseSet,
     labels: &PartLabels,
     seams: Option<&SeamEdges>,
+    meshes: Option<&crate::stages::meshes::MeshPlan>,
     progress: &dyn Progress,
 ) -> Result<Simplification> {
-    let input = ChainInput { set: &|| Ok(set), labels: &|| Ok(labels), hashes: None, seams };
+    let input = ChainInput { set: &|| Ok(set), labels: &|| Ok(labels), hashes: None, seams, meshes };
     let Chain { fit, saliency, simplified, map } = chain(&mut Memory, params.chain(), &input, progress)?;
     Ok(Simplification {
         fit: fit.into_output()?,
@@ -210,7 +211,8 @@ pub fn simplify_rig(
     } else {
         None
     };
-    let stages = simplify_with_seams(params, &set, &part_labels, seams.as_ref(), progress)?;
+    let plan = input.mesh_plan(&set, params.simplify.target())?;
+    let stages = simplify_with_seams(params, &set, &part_labels, seams.as_ref(), plan.as_ref(), progress)?;
     let (edited, summary) =
         crate::stages::rig::simplified_glb(&input.to_owned(), &stages.simplified.body, &stages.map.body)?;
     Ok(RigSimplification { glb: edited.bytes, images: edited.images, rig: summary, ingest, labels, stages })
@@ -233,7 +235,8 @@ pub fn hierarchy(
 ) -> Result<(HierarchyArrays, Vec<LevelSummary>)> {
     hierarchy.check_levels(Some(set.vertex_count()))?;
     let settings = LevelSettings { chain: params.chain(), hierarchy };
-    let input = ChainInput { set: &|| Ok(set), labels: &|| Ok(labels), hashes: None, seams: None };
+    let input =
+        ChainInput { set: &|| Ok(set), labels: &|| Ok(labels), hashes: None, seams: None, meshes: None };
     let levels = hierarchy::levels(&mut Memory, &settings, &input, progress)?;
     let bodies = levels.iter().map(|l| l.body()).collect::<Result<Vec<_>>>()?;
     let arrays = hierarchy::npz_arrays(set.vertex_count(), &set.faces, &bodies)?;

@@ -320,6 +320,7 @@ fn check_parameters(spec: &DatasetToml, pose_files: &[PathBuf]) -> Result<()> {
         rig.weight_options()?;
         rig.parts_config()?;
         rig.lod_fractions()?;
+        rig.check_mesh_overrides()?;
     }
     if let Some(model) = &spec.model {
         model.config()?;

@@ -23,6 +23,7 @@ use serde_json::json;
 
 use crate::cache::{StageKey, canonical_json};
 use crate::stages::chain::{ChainInput, ChainSettings, chain};
+use crate::stages::meshes::MeshPlan;
 use crate::stages::runner::{Memory, Stage, StageOutput, Staged, Store};
 use crate::stages::seams::{SeamEdges, nested_seam_edges};
 use crate::stages::simplify::SimplifyParams;
@@ -105,6 +106,9 @@ impl LodSettings<'_> {
         if let Some(seams) = seams {
             inputs.push(("seams".into(), seams));
         }
+        if let Some(plan) = input.meshes {
+            inputs.push(("meshes".into(), plan.hash()));
+        }
         if let Some(parent) = parent {
             inputs.push(("parent".into(), parent));
         }
@@ -151,7 +155,8 @@ pub fn lod_levels(
             || {
                 let parent = levels.last().map(|l| l.body()).transpose()?;
                 let seams = input.seams.map(|s| s.edges.as_slice());
-                compute_level(settings, step, (input.set)()?, (input.labels)()?, seams, parent, progress)
+                let set = (input.set)()?;
+                compute_level(settings, step, set, (input.labels)()?, seams, input.meshes, parent, progress)
             },
         )?;
         levels.push(level);
@@ -160,13 +165,16 @@ pub fn lod_levels(
 }
 
 /// Level `step + 1` from level `step` (`parent`, or the pose set itself for step 0):
-/// stages 1–4 in memory on the level's registered pose set, its labels and seams.
+/// stages 1–4 in memory on the level's registered pose set, its labels, seams and the
+/// rig's mesh plan on it.
+#[allow(clippy::too_many_arguments)]
 fn compute_level(
     settings: &LodSettings,
     step: usize,
     full: &PoseSet,
     labels: &PartLabels,
     seams: Option<&[[u32; 2]]>,
+    plan: Option<&MeshPlan>,
     parent: Option<&MapV1>,
     progress: &dyn Progress,
 ) -> Result<StageOutput<MapV1, LodSummary>> {
@@ -188,11 +196,14 @@ fn compute_level(
     let fine_seams = seams.map(|s| SeamEdges::new(nested_seam_edges(s, &fine_to_orig, fine_faces)));
 
     let params = settings.simplify_params(step, full.faces.len());
+    // Meshes kept whole stay whole; the others share the level's target.
+    let fine_plan = plan.and_then(|p| p.on_subset(&fine_to_orig));
     let chain_input = ChainInput {
         set: &|| Ok(&fine),
         labels: &|| Ok(&fine_labels),
         hashes: None,
         seams: fine_seams.as_ref(),
+        meshes: fine_plan.as_ref(),
     };
     let stages =
         chain(&mut Memory, ChainSettings { simplify: &params, ..settings.chain }, &chain_input, progress)?;

@@ -12,6 +12,7 @@ pub mod hierarchy;
 pub mod ingest;
 pub mod lods;
 pub mod map;
+pub mod meshes;
 pub mod model;
 pub mod parts;
 pub mod rig;
@@ -204,11 +205,17 @@ pub fn run_stages(
         }
         _ => None,
     };
+    // A rig's meshes under one budget: their plan (`meshes.rs`), when they need one.
+    let mesh_plan = match &inputs.rig {
+        Some(rig) => rig.mesh_plan(set()?, inputs.simplify.target())?,
+        None => None,
+    };
     let input = ChainInput {
         set: &set,
         labels: &part_labels,
         hashes: Some((poses.hash()?, labels.hash()?)),
         seams: seam_edges.as_ref(),
+        meshes: mesh_plan.as_ref(),
     };
     let settings = ChainSettings { fit: inputs.fit, saliency: inputs.saliency, simplify: inputs.simplify };
     let Chain { fit, saliency, simplified, map } = chain(runner, settings, &input, progress)?;

@@ -10,6 +10,7 @@
 //! Keys: the rig file's bytes (never its path), `desal_rig::VERSION`, and every resolved
 //! parameter below, destructured exhaustively.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
@@ -91,6 +92,11 @@ pub struct RigParams {
     /// key's parameters when unset, as `max_influences`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lods: Option<Vec<f64>>,
+    /// `[dataset.rig.meshes."NAME"]`: a mesh's own ratio by mesh name, node name or mesh
+    /// index (`ratio = 1.0` keeps it whole; `stages::meshes`). Left out of the key's
+    /// parameters when empty.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub meshes: BTreeMap<String, crate::stages::meshes::MeshOverride>,
 }
 
 /// `max_influences = N | "all"`.
@@ -201,6 +207,12 @@ impl RigParams {
         }
     }
 
+    /// Checks every `[dataset.rig.meshes."NAME"]` (a ratio in (0, 1]); whether each
+    /// names a mesh is known once the rig is read.
+    pub fn check_mesh_overrides(&self) -> Result<()> {
+        self.meshes.iter().try_for_each(|(name, o)| o.check(name))
+    }
+
     pub fn parts_config(&self) -> Result<desal_rig::PartsConfig> {
         if self.min_part_vertices < 3 {
             bail!("rig.min_part_vertices must be at least 3 (a part needs a rigid fit)");
@@ -284,6 +296,39 @@ impl RigInput<'_> {
 
     pub fn hints(&self) -> Vec<(String, String)> {
         vec![("rig".into(), crate::stages::ingest::file_name(self.file))]
+    }
+
+    /// The plan of stage 3 over the rig's meshes (`stages::meshes::MeshPlan`) for `set`,
+    /// its pose set, under `target`; `None` when stage 3 runs once. An override naming
+    /// no mesh is refused, naming the file.
+    pub fn mesh_plan(
+        &self,
+        set: &desal_mesh::PoseSet,
+        target: desal_simplify::Target,
+    ) -> Result<Option<crate::stages::meshes::MeshPlan>> {
+        let rig = desal_rig::read_rig(self.file, &ReadOptions { mesh: self.params.mesh.clone() })?;
+        let weld = desal_rig::Weld::new(&rig.mesh);
+        if weld.welded_count() != set.vertex_count() {
+            bail!("{}: the rig has changed since its pose set was made", self.file.display());
+        }
+        let welded_end = |split_end: u32| {
+            (split_end as usize).checked_sub(1).map_or(0, |last| weld.split_to_welded[last] + 1)
+        };
+        let meshes: Vec<crate::stages::meshes::MeshOfRig> = rig
+            .meshes
+            .iter()
+            .map(|part| {
+                let mut aliases = vec![part.name.clone(), part.mesh.to_string()];
+                aliases.extend(rig.nodes[part.node].name.clone());
+                crate::stages::meshes::MeshOfRig {
+                    name: part.name.clone(),
+                    aliases,
+                    vertices: [welded_end(part.vertices.start), welded_end(part.vertices.end)],
+                }
+            })
+            .collect();
+        crate::stages::meshes::MeshPlan::new(&meshes, set, target, &self.params.meshes)
+            .with_context(|| format!("{}", self.file.display()))
     }
 
     /// Reads the rig, keeping its whole document, and poses it at its frames: what the
