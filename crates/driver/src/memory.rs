@@ -18,6 +18,7 @@ use crate::stages::chain::{Chain, ChainInput, ChainSettings, chain};
 use crate::stages::fit::{FitParams, FitSummary};
 use crate::stages::hierarchy::{self, HierarchyParams, LevelSettings, LevelSummary};
 use crate::stages::ingest::{IngestSummary, LabelsSummary};
+use crate::stages::lods::{LodSettings, lod_levels};
 use crate::stages::map::{self, MapSummary};
 use crate::stages::parts::{self, PartsParams, PartsSummary};
 use crate::stages::rig::{RigInput, RigParams, SimplifiedRigSummary};
@@ -185,6 +186,9 @@ pub struct RigSimplification {
     /// The images it names by a relative URI, to be written beside it.
     pub images: Vec<desal_rig::ExternalImage>,
     pub rig: SimplifiedRigSummary,
+    /// With `lods`: each level's rig and the chain in one (`simplified-lod<k>.glb`,
+    /// `simplified-lods.glb`); their figures are `rig.lods`.
+    pub lods: Option<crate::stages::rig::LodGlbs>,
     pub ingest: StageOutput<PoseSetV2, IngestSummary>,
     pub labels: StageOutput<LabelsV1, LabelsSummary>,
     pub stages: Simplification,
@@ -200,6 +204,8 @@ pub fn simplify_rig(
     progress: &dyn Progress,
 ) -> Result<RigSimplification> {
     rig.weight_options()?;
+    rig.lod_fractions()?;
+    rig.check_mesh_overrides()?;
     let input = RigInput { file, params: rig };
     let ingest = input.compute_poses()?;
     let set = ingest.body.to_pose_set().with_context(|| format!("{}", file.display()))?;
@@ -213,9 +219,36 @@ pub fn simplify_rig(
     };
     let plan = input.mesh_plan(&set, params.simplify.target())?;
     let stages = simplify_with_seams(params, &set, &part_labels, seams.as_ref(), plan.as_ref(), progress)?;
-    let (edited, summary) =
+    let (edited, mut summary) =
         crate::stages::rig::simplified_glb(&input.to_owned(), &stages.simplified.body, &stages.map.body)?;
-    Ok(RigSimplification { glb: edited.bytes, images: edited.images, rig: summary, ingest, labels, stages })
+    // The LOD chain, as `desal run` makes it (`stages::lods`), in memory.
+    let fractions = rig.lod_fractions()?;
+    let lods = if fractions.is_empty() {
+        None
+    } else {
+        let chain_input = ChainInput {
+            set: &|| Ok(&set),
+            labels: &|| Ok(&part_labels),
+            hashes: None,
+            seams: seams.as_ref(),
+            meshes: plan.as_ref(),
+        };
+        let settings = LodSettings { chain: params.chain(), fractions };
+        let levels = lod_levels(&mut Memory, &settings, &chain_input, set.faces.len(), progress)?;
+        let bodies = levels.iter().map(|l| Ok((l.body()?, &l.summary))).collect::<Result<Vec<_>>>()?;
+        let files = crate::stages::rig::lod_glbs(&input.to_owned(), &bodies)?;
+        summary.lods = files.figures.clone();
+        Some(files)
+    };
+    Ok(RigSimplification {
+        glb: edited.bytes,
+        images: edited.images,
+        rig: summary,
+        lods,
+        ingest,
+        labels,
+        stages,
+    })
 }
 
 /// The simplified pose set and its labels: `map` applied to every pose of `set`.

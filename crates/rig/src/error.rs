@@ -36,6 +36,11 @@ pub enum RigError {
         "{path}: mesh = '{wanted}' names no skinned mesh or mesh below a bone (by mesh name, node name or mesh index); the meshes are: {names}"
     )]
     NoSuchMesh { path: PathBuf, wanted: String, names: String },
+    /// A `[dataset.rig.meshes."NAME"]` whose name is none of the simplified meshes'.
+    #[error(
+        "{path}: rig.meshes names '{wanted}', which is no mesh desal simplifies here (by mesh name, node name or mesh index); the meshes are: {names}"
+    )]
+    NoSuchMeshOverride { path: PathBuf, wanted: String, names: String },
     #[error("{path}: mesh '{mesh}' primitive {primitive}: {reason}")]
     Primitive { path: PathBuf, mesh: String, primitive: usize, reason: String },
     #[error(

@@ -94,8 +94,10 @@ pub struct MeshOfRig {
 impl MeshPlan {
     /// The plan of `meshes` (the rig's, in document order, covering `set`'s vertices)
     /// under `target`, with `overrides` by mesh name, node name or index; `None` when
-    /// stage 3 runs once as before (module doc). Refused: an override naming no mesh.
+    /// stage 3 runs once as before (module doc). Refused: an override naming no mesh
+    /// (`RigError::NoSuchMeshOverride`, naming `file`).
     pub fn new(
+        file: &std::path::Path,
         meshes: &[MeshOfRig],
         set: &PoseSet,
         target: Target,
@@ -105,11 +107,12 @@ impl MeshPlan {
             o.check(name)?;
             if !meshes.iter().any(|m| m.aliases.contains(name)) {
                 let known: Vec<&str> = meshes.iter().map(|m| m.name.as_str()).collect();
-                bail!(
-                    "rig.meshes names '{name}', which is no mesh desal simplifies here (by mesh name, node name \
-                     or mesh index); the meshes are: {}",
-                    known.join(", ")
-                );
+                return Err(desal_rig::RigError::NoSuchMeshOverride {
+                    path: file.to_owned(),
+                    wanted: name.clone(),
+                    names: known.join(", "),
+                }
+                .into());
             }
         }
         let total_faces = set.faces.len().max(1);

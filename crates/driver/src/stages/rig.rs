@@ -327,8 +327,7 @@ impl RigInput<'_> {
                 }
             })
             .collect();
-        crate::stages::meshes::MeshPlan::new(&meshes, set, target, &self.params.meshes)
-            .with_context(|| format!("{}", self.file.display()))
+        crate::stages::meshes::MeshPlan::new(self.file, &meshes, set, target, &self.params.meshes)
     }
 
     /// Reads the rig, keeping its whole document, and poses it at its frames: what the
