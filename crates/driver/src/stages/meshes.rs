@@ -350,7 +350,8 @@ fn slots_of_output(
             break;
         }
     }
-    let mut previous = slots.first().copied().unwrap_or(0);
+    let Some(&first) = slots.first() else { bail!("stage 3 ran over no mesh") };
+    let mut previous = first;
     let slot: Vec<usize> = slot
         .into_iter()
         .map(|k| {
