@@ -18,6 +18,7 @@ use crate::stages::chain::{Chain, ChainInput, ChainSettings, chain};
 use crate::stages::fit::{FitParams, FitSummary};
 use crate::stages::hierarchy::{self, HierarchyParams, LevelSettings, LevelSummary};
 use crate::stages::ingest::{IngestSummary, LabelsSummary};
+use crate::stages::lods::{LodSettings, lod_levels};
 use crate::stages::map::{self, MapSummary};
 use crate::stages::parts::{self, PartsParams, PartsSummary};
 use crate::stages::rig::{RigInput, RigParams, SimplifiedRigSummary};
@@ -153,7 +154,7 @@ pub fn simplify_pose_set(
     labels: &PartLabels,
     progress: &dyn Progress,
 ) -> Result<Simplification> {
-    simplify_with_seams(params, set, labels, None, progress)
+    simplify_with_seams(params, set, labels, None, None, progress)
 }
 
 /// [`simplify_pose_set`] with the template's attribute seams handed to stage 3 (a rig's,
@@ -163,9 +164,10 @@ fn simplify_with_seams(
     set: &PoseSet,
     labels: &PartLabels,
     seams: Option<&SeamEdges>,
+    meshes: Option<&crate::stages::meshes::MeshPlan>,
     progress: &dyn Progress,
 ) -> Result<Simplification> {
-    let input = ChainInput { set: &|| Ok(set), labels: &|| Ok(labels), hashes: None, seams };
+    let input = ChainInput { set: &|| Ok(set), labels: &|| Ok(labels), hashes: None, seams, meshes };
     let Chain { fit, saliency, simplified, map } = chain(&mut Memory, params.chain(), &input, progress)?;
     Ok(Simplification {
         fit: fit.into_output()?,
@@ -184,6 +186,9 @@ pub struct RigSimplification {
     /// The images it names by a relative URI, to be written beside it.
     pub images: Vec<desal_rig::ExternalImage>,
     pub rig: SimplifiedRigSummary,
+    /// With `lods`: each level's rig and the chain in one (`simplified-lod<k>.glb`,
+    /// `simplified-lods.glb`); their figures are `rig.lods`.
+    pub lods: Option<crate::stages::rig::LodGlbs>,
     pub ingest: StageOutput<PoseSetV2, IngestSummary>,
     pub labels: StageOutput<LabelsV1, LabelsSummary>,
     pub stages: Simplification,
@@ -199,20 +204,51 @@ pub fn simplify_rig(
     progress: &dyn Progress,
 ) -> Result<RigSimplification> {
     rig.weight_options()?;
+    rig.lod_fractions()?;
+    rig.check_mesh_overrides()?;
     let input = RigInput { file, params: rig };
     let ingest = input.compute_poses()?;
     let set = ingest.body.to_pose_set().with_context(|| format!("{}", file.display()))?;
     let labels = input.compute_labels(&set)?;
     let part_labels = labels.body.to_labels().with_context(|| format!("{}", file.display()))?;
+    let part_labels = input.to_owned().with_part_tree(part_labels)?;
     let seams = if params.simplify.keeps_seams() {
         Some(crate::stages::seams::rig_seam_edges(&input, set.vertex_count())?)
     } else {
         None
     };
-    let stages = simplify_with_seams(params, &set, &part_labels, seams.as_ref(), progress)?;
-    let (edited, summary) =
+    let plan = input.mesh_plan(&set, params.simplify.target())?;
+    let stages = simplify_with_seams(params, &set, &part_labels, seams.as_ref(), plan.as_ref(), progress)?;
+    let (edited, mut summary) =
         crate::stages::rig::simplified_glb(&input.to_owned(), &stages.simplified.body, &stages.map.body)?;
-    Ok(RigSimplification { glb: edited.bytes, images: edited.images, rig: summary, ingest, labels, stages })
+    // The LOD chain, as `desal run` makes it (`stages::lods`), in memory.
+    let fractions = rig.lod_fractions()?;
+    let lods = if fractions.is_empty() {
+        None
+    } else {
+        let chain_input = ChainInput {
+            set: &|| Ok(&set),
+            labels: &|| Ok(&part_labels),
+            hashes: None,
+            seams: seams.as_ref(),
+            meshes: plan.as_ref(),
+        };
+        let settings = LodSettings { chain: params.chain(), fractions };
+        let levels = lod_levels(&mut Memory, &settings, &chain_input, set.faces.len(), progress)?;
+        let bodies = levels.iter().map(|l| Ok((l.body()?, &l.summary))).collect::<Result<Vec<_>>>()?;
+        let files = crate::stages::rig::lod_glbs(&input.to_owned(), &bodies)?;
+        summary.lods = files.figures.clone();
+        Some(files)
+    };
+    Ok(RigSimplification {
+        glb: edited.bytes,
+        images: edited.images,
+        rig: summary,
+        lods,
+        ingest,
+        labels,
+        stages,
+    })
 }
 
 /// The simplified pose set and its labels: `map` applied to every pose of `set`.
@@ -232,7 +268,8 @@ pub fn hierarchy(
 ) -> Result<(HierarchyArrays, Vec<LevelSummary>)> {
     hierarchy.check_levels(Some(set.vertex_count()))?;
     let settings = LevelSettings { chain: params.chain(), hierarchy };
-    let input = ChainInput { set: &|| Ok(set), labels: &|| Ok(labels), hashes: None, seams: None };
+    let input =
+        ChainInput { set: &|| Ok(set), labels: &|| Ok(labels), hashes: None, seams: None, meshes: None };
     let levels = hierarchy::levels(&mut Memory, &settings, &input, progress)?;
     let bodies = levels.iter().map(|l| l.body()).collect::<Result<Vec<_>>>()?;
     let arrays = hierarchy::npz_arrays(set.vertex_count(), &set.faces, &bodies)?;

@@ -13,6 +13,7 @@
 //! | `hierarchy-<k>.dsa`, `hierarchy.npz`, `hierarchy.json` | with `[dataset.hierarchy]`: each level's cache entry, the npz of every level (`stages::hierarchy::npz_arrays`), the levels' summaries |
 //! | `hierarchy.png`, `upsampling-error.png`, `upsampling-error-<k>.ply` | with `[dataset.hierarchy]`: the levels side by side; the held-out per-vertex upsampling error of each level, fitted against barycentric (RMS, drawn and as PLY properties) |
 //! | `simplified.glb` (`.vrm` for a `.vrm`), `simplified-rig.json`, the images it names by URI | with `[dataset.rig]`: the simplified rig, the input document edited (`stages::rig::simplified_glb`), its figures, and its external images under their relative paths |
+//! | `simplified-lod<k>.glb`, `simplified-lods.glb` (`.vrm` for a `.vrm`) | with `lods` in `[dataset.rig]`: each LOD level's rig and the chain in one (`MSFT_lod`, `stages::rig::lod_glbs`); `simplified-rig.json`'s `lods` |
 //! | `model.npz`, `model.json` | with `[dataset.model]`: the simplified model in the input's keys and dtypes (an npz also for a `.pkl` input), its joint regressor solved on the kept vertices (`stages::model::simplified_model`), and what the solve and the landmarks did |
 //! | `view.html` | with `[dataset.rig]`: the input and the simplified rig side by side in three.js with their materials and textures, a level selector and morph-target sliders; three.js loaded from its pinned CDN URLs, or inlined from the package `DESAL_THREE` names (`viewer.rs`) |
 //! | `report.json` | the run's report, with `outputs_key` |
@@ -178,8 +179,25 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
     if let Some(rig) = &stages.rig {
         // Built before anything is written: a rig that cannot be written fails the run
         // with the output folder untouched.
-        let (edited, summary) = crate::stages::rig::simplified_glb(rig, stages.simplified.body()?, map)?;
-        for (name, page) in crate::viewer::view_files(rig, &edited.bytes, &summary)? {
+        let (edited, mut summary) = crate::stages::rig::simplified_glb(rig, stages.simplified.body()?, map)?;
+        // The page shows every LOD level too, under the level selector.
+        let mut lod_pages: Vec<(String, Vec<u8>)> = Vec::new();
+        if !stages.lods.is_empty() {
+            let levels =
+                stages.lods.iter().map(|l| Ok((l.body()?, &l.summary))).collect::<Result<Vec<_>>>()?;
+            let lods = crate::stages::rig::lod_glbs(rig, &levels)?;
+            for (k, level) in lods.levels.into_iter().enumerate() {
+                let name = crate::stages::rig::lod_file_name(rig, Some(k + 1));
+                let bytes = level.bytes;
+                lod_pages.push((format!("LOD {}", k + 1), bytes.clone()));
+                outputs.files.push((name, Box::new(move |p| Ok(desal_io::write_atomic(p, &bytes)?))));
+            }
+            let bytes = lods.combined.bytes;
+            let name = crate::stages::rig::lod_file_name(rig, None);
+            outputs.files.push((name, Box::new(move |p| Ok(desal_io::write_atomic(p, &bytes)?))));
+            summary.lods = lods.figures;
+        }
+        for (name, page) in crate::viewer::view_files(rig, &edited.bytes, &lod_pages, &summary)? {
             outputs.files.push((name, Box::new(move |p| Ok(desal_io::write_atomic(p, &page)?))));
         }
         let bytes = edited.bytes;

@@ -340,6 +340,8 @@ fn check_parameters(spec: &DatasetToml, pose_files: &[PathBuf]) -> Result<()> {
         rig.frame_config()?;
         rig.weight_options()?;
         rig.parts_config()?;
+        rig.lod_fractions()?;
+        rig.check_mesh_overrides()?;
     }
     if let Some(model) = &spec.model {
         model.config()?;

@@ -2,8 +2,8 @@
 //! a three.js page (`desal_rig::viewer`), which loads the pinned three.js from its CDN, or
 //! inlines it from the local package `DESAL_THREE` names, for offline use.
 //!
-//! The page's levels are the input, then `simplified.glb` (the lead passes a LOD chain's
-//! levels here later). The input level is the input file's own bytes when it is a binary
+//! The page's levels are the input, then `simplified.glb`, then each level of a LOD chain
+//! (`lods` in `[dataset.rig]`: `simplified-lod<k>.glb`), under its level selector. The input level is the input file's own bytes when it is a binary
 //! glTF (`.glb`, `.vrm`): its materials, textures, every mesh and morph target, as
 //! `simplified.glb` (the input document, edited) has them. A `.gltf` (JSON, maybe with
 //! external buffers and images) is shown as desal read it instead (the skinned meshes, the
@@ -19,10 +19,12 @@ use crate::stages::rig::{RigSource, SimplifiedRigSummary};
 /// The page's file name in the output folder.
 pub const VIEW_HTML: &str = "view.html";
 
-/// `(relative path, bytes)` of `view.html`.
+/// `(relative path, bytes)` of `view.html`; `lods` are the LOD chain's levels, `(label,
+/// glb bytes)`, finest first.
 pub fn view_files(
     rig: &RigSource,
     simplified_glb: &[u8],
+    lods: &[(String, Vec<u8>)],
     summary: &SimplifiedRigSummary,
 ) -> Result<Vec<(String, Vec<u8>)>> {
     let bytes = desal_io::file::read_regular_file(&rig.file)?;
@@ -39,10 +41,9 @@ pub fn view_files(
         summary.simplified_vertices,
         summary.weights,
     );
-    let levels = [
-        ViewLevel { label: "input", glb: &full_glb },
-        ViewLevel { label: "simplified", glb: simplified_glb },
-    ];
+    let mut levels =
+        vec![ViewLevel { label: "input", glb: &full_glb }, ViewLevel { label: "simplified", glb: simplified_glb }];
+    levels.extend(lods.iter().map(|(label, glb)| ViewLevel { label, glb }));
     let input = ViewInput { title: &title, levels: &levels, caption: &caption };
     let page = view_html(&input, three_dir_from_env().as_deref())?;
     Ok(vec![(VIEW_HTML.to_owned(), page.into_bytes())])

@@ -163,8 +163,11 @@ mod tests {
             positions: vec![v(0.0, 0.0), v(1.0, 0.0), v(2.0, 0.0), v(0.0, 1.0), v(1.0, 1.0), v(2.0, 1.0)],
             faces: vec![[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4]],
         };
-        let labels =
-            PartLabels { labels: vec![0, 1, 1, 0, 1, 1], names: vec!["leftHand".into(), "arm".into()] };
+        let labels = PartLabels {
+            labels: vec![0, 1, 1, 0, 1, 1],
+            names: vec!["leftHand".into(), "arm".into()],
+            parents: None,
+        };
         let regions = Regions::new(&mesh, &labels);
         assert_eq!(regions.classify(&v(1.02, 0.01), 1), 0);
         assert_eq!(regions.classify(&v(0.2, 0.5), 0), 1);

@@ -38,7 +38,7 @@ pub struct RigModel {
     pub options: WeightOptions,
     /// The `[dataset.rig] mesh` setting (which skinned mesh), for reading another tool's
     /// output of the same file.
-    pub mesh: Option<String>,
+    pub mesh: Option<Vec<String>>,
 }
 
 /// A simplified mesh that carries its own skin (another tool's rig).

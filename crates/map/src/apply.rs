@@ -17,7 +17,10 @@ use crate::vertex_map::VertexMap;
 /// being vertex `map.simp_to_orig[simp_idx]` of the original pose `p`, every pose with
 /// the triangles `simp_faces`, the same names and template index; and labels with
 /// `labels[simp_idx] = original_labels[orig_idx]` and the same part names (a part may
-/// end up with no vertex; see [`empty_parts`]).
+/// end up with no vertex; see [`empty_parts`]) — except for labels with a part tree
+/// ([`PartLabels::parents`]), whose parts left without three non-collinear simplified
+/// template vertices join their parents ([`PartLabels::merge_unfittable_parts`]), so
+/// fewer parts may come back.
 ///
 /// Errors: a map entry out of range or repeated, a face index past the map, labels not
 /// matching the pose set, or an empty map or face list.
@@ -35,10 +38,14 @@ pub fn apply_map(
     let simplified_poses: Vec<Vec<Vec3>> = poses.poses.par_iter().map(|pose| gather(pose, map)).collect();
     let simplified =
         PoseSet::try_new(poses.names.clone(), simplified_poses, simp_faces.to_vec(), poses.template)?;
-    let simplified_labels = PartLabels {
+    let carried = PartLabels {
         labels: map.simp_to_orig.iter().map(|&orig_idx| labels.labels[orig_idx as usize]).collect(),
         names: labels.names.clone(),
+        parents: labels.parents.clone(),
     };
+    // Labels with a part tree (a rig's joints) hand a part the simplification left
+    // unfittable to its parent; labels without one are carried as they are.
+    let (simplified_labels, _merged) = carried.merge_unfittable_parts(simplified.template_positions());
     Ok((simplified, simplified_labels))
 }
 

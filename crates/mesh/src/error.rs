@@ -60,6 +60,9 @@ pub enum MeshError {
         "part {part} ('{name}') has {vertices} vertices that do not span a plane (fewer than 3, or all collinear); a rigid fit needs 3 non-collinear vertices per part — merge it into a neighbouring part"
     )]
     DegeneratePart { part: u32, name: String, vertices: usize },
+    /// A part tree that is not a tree over the labels' parts (`PartLabels::with_parents`).
+    #[error("the part tree is not a tree over the parts: {reason}")]
+    PartTree { reason: String },
 }
 
 /// `[a, b, c]`, or `no face` past the end of a shorter list.

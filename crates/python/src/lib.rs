@@ -686,8 +686,8 @@ fn simplify_pose_set<'py>(
 }
 
 /// A skinned glTF rig simplified as `desal run` simplifies a `[dataset.rig]`, written to
-/// `out` as a `.glb` (the bytes `desal run` writes as `simplified.glb`); returns the
-/// report. `rig` is the JSON of the `[dataset.rig]` table without `file`; `frames` is
+/// `out` as a `.glb` (the bytes `desal run` writes as `simplified.glb`), with `lods` each
+/// level and the chain beside it ([`lod_path`]); returns the report. `rig` is the JSON of the `[dataset.rig]` table without `file`; `frames` is
 /// at most [`MAX_RIG_FRAMES`].
 #[pyfunction]
 #[pyo3(signature = (file, out, rig=None, method="paper", fit=None, saliency=None, simplify=None, progress=None))]
@@ -723,15 +723,31 @@ fn simplify_rig<'py>(
         rig.frame_config().map_err(errors::input)?;
         rig.parts_config().map_err(errors::input)?;
         rig.weight_options().map_err(errors::input)?;
+        rig.lod_fractions().map_err(errors::input)?;
+        rig.check_mesh_overrides().map_err(errors::input)?;
         let params = stage_params(method, fit, saliency, simplify)?;
         // Refused now, not after the simplification: an output that is a folder or a FIFO.
         desal_io::confine::write_target(&out).map_err(errors::io)?;
         let s = detached(py, progress, |p| {
             let s = memory::simplify_rig(&file, &rig, &params, p).map_err(errors::classify)?;
-            desal_io::write_atomic(&out, &s.glb).map_err(errors::io)?;
+            // Every file is built before the first is written.
+            let mut files = vec![(out.clone(), s.glb.clone())];
+            if let Some(lods) = &s.lods {
+                for (k, level) in lods.levels.iter().enumerate() {
+                    files.push((lod_path(&out, &format!("lod{}", k + 1)), level.bytes.clone()));
+                }
+                files.push((lod_path(&out, "lods"), lods.combined.bytes.clone()));
+            }
+            for (path, _) in &files {
+                desal_io::confine::write_target(path).map_err(errors::io)?;
+            }
+            for (path, bytes) in &files {
+                desal_io::write_atomic(path, bytes).map_err(errors::io)?;
+            }
             desal_driver::stages::rig::write_images_beside(&out, &s.images).map_err(errors::classify)?;
-            Ok(s)
+            Ok((s, files.into_iter().skip(1).map(|(path, _)| path).collect::<Vec<_>>()))
         })?;
+        let (s, lod_files) = s;
         let report = PyDict::new(py);
         report.set_item("method", method)?;
         report.set_item("glb", out)?;
@@ -751,8 +767,18 @@ fn simplify_rig<'py>(
             )?,
         )?;
         report.set_item("map", convert::to_python(py, &s.stages.map.summary)?)?;
+        report.set_item("lods", convert::to_python(py, &s.rig.lods)?)?;
+        report.set_item("lod_files", lod_files)?;
         Ok(report)
     })
+}
+
+/// Where `simplify_rig` writes a LOD file beside `out`: `<stem>-<what>.<extension>`
+/// (`avatar-lod1.glb`, `avatar-lods.glb` for `avatar.glb`).
+fn lod_path(out: &std::path::Path, what: &str) -> std::path::PathBuf {
+    let stem = out.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let extension = out.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_else(|| "glb".into());
+    out.with_file_name(format!("{stem}-{what}.{extension}"))
 }
 
 /// A hierarchy of coarse levels: the npz arrays (`levels`, `F{k}`, `A{k}_*`, `D{k}_*`,

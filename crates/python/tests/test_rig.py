@@ -84,3 +84,39 @@ def test_max_influences_caps_subset_weights(tmp_path):
     assert exact["rig"]["max_influences"] > 4
     with pytest.raises(desal.InputError, match="max_influences"):
         desal.simplify_rig(RIG, tmp_path / "zero.glb", **SETTINGS, max_influences=0)
+
+
+def test_lods_write_every_level_and_report_them(tmp_path):
+    """Issue 42, item 6 and 12: lods writes each level beside out and the MSFT_lod chain;
+    each level's faces are near its fraction of the original 26756 and its vertices
+    fewer than the level before's; the report has each level's figures."""
+    out = tmp_path / "avatar.glb"
+    report = desal.simplify_rig(RIG, out, **SETTINGS, lods=[0.5, 0.2])
+    assert report["lod_files"] == [tmp_path / "avatar-lod1.glb", tmp_path / "avatar-lod2.glb", tmp_path / "avatar-lods.glb"]
+    assert all(path.read_bytes()[:4] == b"glTF" for path in report["lod_files"])
+    levels = report["lods"]
+    assert [level["level"] for level in levels] == [1, 2]
+    assert [level["target_faces"] for level in levels] == [13378, 5351]
+    for level in levels:
+        assert abs(level["output_faces"] - level["target_faces"]) <= 1, level
+    assert levels[1]["vertices"] < levels[0]["vertices"]
+    assert report["rig"]["lods"] == levels
+    chain = (tmp_path / "avatar-lods.glb").read_bytes()
+    assert b"MSFT_lod" in chain and b"Body_LOD2" in chain
+
+
+def test_mesh_lists_overrides_and_bad_lods(tmp_path):
+    """Issue 42, items 2 and 12: mesh takes a list (here by mesh index), meshes a mesh's
+    own ratio (1.0 keeps the one mesh whole); bad lods or an unknown mesh are input
+    errors naming the key."""
+    out = tmp_path / "whole.glb"
+    report = desal.simplify_rig(RIG, out, frames=5, ratio=0.2, mesh=["0"], meshes={"Body": 1.0})
+    assert report["rig"]["simplified_vertices"] == 13380, "kept whole"
+    assert report["lods"] == [] and report["lod_files"] == []
+    with pytest.raises(desal.InputError, match="strictly decreasing"):
+        desal.simplify_rig(RIG, tmp_path / "bad.glb", target_vertices=100, lods=[0.2, 0.5])
+    with pytest.raises(desal.InputError, match="rig.meshes names 'Nope'"):
+        desal.simplify_rig(RIG, tmp_path / "bad.glb", target_vertices=100, frames=3, meshes={"Nope": 0.5})
+    with pytest.raises(desal.InputError, match="names no skinned mesh"):
+        desal.simplify_rig(RIG, tmp_path / "bad.glb", target_vertices=100, mesh=["Body", "Nope"])
+    assert not (tmp_path / "bad.glb").exists()

@@ -110,6 +110,125 @@ pub fn write_edited(source: &SourceDocument, input: &Rig, simplified: &Rig) -> R
     crate::error::without_panics(&source.path, || Editor { source, input, simplified }.write())
 }
 
+/// The extension that lists a node's lower levels of detail (Microsoft's vendor
+/// extension, which Babylon.js reads).
+pub const MSFT_LOD: &str = "MSFT_lod";
+
+/// Writes the input document with every level of `levels` (simplified rigs of `input`,
+/// finest first, e.g. nested levels of detail) added beside the input's own meshes, as
+/// the `MSFT_lod` extension holds them: for each simplified glTF mesh and level `k`
+/// (from 1), a copy of the mesh named `<name>_LOD<k>` with that level's primitives (new
+/// accessors, built as [`write_edited`] builds them) and a copy of the node that carries
+/// it, named `<node>_LOD<k>`, with the same skin and transform and no children, in no
+/// scene; the carrying node gets `extensions.MSFT_lod.ids` (its levels' nodes, finest
+/// first) and `extras.MSFT_screencoverage` (`coverage`: one value per level, the input
+/// first), and the input mesh is renamed `<name>_LOD0` (the names Unity's and Unreal's
+/// importers group). `MSFT_lod` joins `extensionsUsed`. Everything else is the input's;
+/// no accessor or view of the input moves. A reader without `MSFT_lod` shows level 0.
+pub fn write_lods(
+    source: &SourceDocument,
+    input: &Rig,
+    levels: &[Rig],
+    coverage: &[f64],
+) -> Result<EditedGlb, RigError> {
+    if coverage.len() != levels.len() + 1 {
+        return Err(RigError::Output(format!(
+            "{} screen coverages for {} levels of detail and the input",
+            coverage.len(),
+            levels.len()
+        )));
+    }
+    crate::error::without_panics(&source.path, || {
+        let mut json = source.json.clone();
+        let mut added = Vec::new();
+        let mut cache = HashMap::new();
+        let mut primitives = Vec::new();
+        for (k, level) in levels.iter().enumerate() {
+            let editor = Editor { source, input, simplified: level };
+            editor.check_sources()?;
+            for span in &level.mesh.primitives {
+                primitives.push((k + 1, editor.new_primitive(span, &mut added, &mut cache)?));
+            }
+        }
+        // Nothing is replaced: the new accessors go after the input's.
+        let slots = place_accessors(&mut json, &BTreeSet::new(), added.len());
+        let name_of = |v: &Value, fallback: String| v["name"].as_str().map_or(fallback, str::to_owned);
+        let mut copies: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+        for (level, p) in &primitives {
+            let copy = *copies.entry((*level, p.mesh)).or_insert_with(|| {
+                let mut mesh = source.json["meshes"][p.mesh].clone();
+                mesh["name"] = format!("{}_LOD{level}", name_of(&mesh, format!("mesh{}", p.mesh))).into();
+                let meshes = json["meshes"].as_array_mut().expect("a document with a mesh has meshes");
+                meshes.push(mesh);
+                meshes.len() - 1
+            });
+            set_primitive(&mut json["meshes"][copy]["primitives"][p.primitive], p, &slots);
+        }
+        for part in &input.meshes {
+            let node = &source.json["nodes"][part.node];
+            let node_name = name_of(node, format!("node{}", part.node));
+            let mut ids = Vec::new();
+            for level in 1..=levels.len() {
+                let Some(&copy) = copies.get(&(level, part.mesh)) else { continue };
+                let mut lod = Map::new();
+                lod.insert("name".into(), format!("{node_name}_LOD{level}").into());
+                lod.insert("mesh".into(), copy.into());
+                // Outside the scene's tree, a level stands where its node does.
+                for key in ["skin", "matrix", "translation", "rotation", "scale", "weights"] {
+                    if let Some(v) = node.get(key) {
+                        lod.insert(key.into(), v.clone());
+                    }
+                }
+                let nodes = json["nodes"].as_array_mut().expect("a mesh's node is in nodes");
+                nodes.push(Value::Object(lod));
+                ids.push(nodes.len() - 1);
+            }
+            if ids.is_empty() {
+                continue;
+            }
+            let mesh_name = name_of(&source.json["meshes"][part.mesh], format!("mesh{}", part.mesh));
+            json["meshes"][part.mesh]["name"] = format!("{mesh_name}_LOD0").into();
+            let node = json["nodes"][part.node].as_object_mut().expect("a node is an object");
+            let extensions = node.entry("extensions").or_insert_with(|| json!({}));
+            extensions[MSFT_LOD] = json!({ "ids": ids });
+            let extras = node.entry("extras").or_insert_with(|| json!({}));
+            if extras.is_object() {
+                extras["MSFT_screencoverage"] = json!(coverage);
+            }
+        }
+        let used = json.as_object_mut().expect("a glTF document is an object").entry("extensionsUsed");
+        let used = used.or_insert_with(|| json!([]));
+        if let Some(list) = used.as_array_mut()
+            && !list.iter().any(|e| e == MSFT_LOD)
+        {
+            list.push(MSFT_LOD.into());
+        }
+        let editor = Editor { source, input, simplified: input };
+        let bin = editor.rebuild_buffers(&mut json, &BTreeSet::new(), added, &slots)?;
+        editor.finish(json, bin)
+    })
+}
+
+/// Points `primitive` (its JSON in the output) at the new accessors of `p`: its
+/// attributes (the input's `JOINTS_n`/`WEIGHTS_n` dropped first, as the new ones may be
+/// fewer), indices and morph targets.
+fn set_primitive(primitive: &mut Value, p: &NewPrimitive, slots: &[usize]) {
+    let attributes = primitive["attributes"].as_object_mut().expect("read as an object");
+    attributes.retain(|name, _| !name.starts_with("JOINTS_") && !name.starts_with("WEIGHTS_"));
+    for (name, &a) in &p.attributes {
+        attributes.insert(name.clone(), slots[a].into());
+    }
+    primitive["indices"] = slots[p.indices].into();
+    if !p.targets.is_empty() {
+        let targets: Vec<Value> = p
+            .targets
+            .iter()
+            .map(|t| Value::Object(t.iter().map(|(n, &a)| (n.clone(), slots[a].into())).collect()))
+            .collect();
+        primitive["targets"] = targets.into();
+    }
+}
+
 /// One accessor to add: its JSON without `bufferView`, its packed bytes, its view target.
 struct NewAccessor {
     json: Map<String, Value>,
@@ -136,13 +255,20 @@ struct Editor<'a> {
 }
 
 impl Editor<'_> {
-    fn write(&self) -> Result<EditedGlb, RigError> {
+    /// Refuses a simplified mesh that does not say where its vertices come from.
+    fn check_sources(&self) -> Result<(), RigError> {
         let out = &self.simplified.mesh;
         if out.sources.len() != out.vertex_count() || out.primitives.is_empty() {
             return Err(RigError::Output(
                 "the simplified mesh does not say which input vertices and primitives it comes from".into(),
             ));
         }
+        Ok(())
+    }
+
+    fn write(&self) -> Result<EditedGlb, RigError> {
+        self.check_sources()?;
+        let out = &self.simplified.mesh;
         let mut json = self.source.json.clone();
         let mut added = Vec::new();
         let mut primitives = Vec::new();
@@ -154,23 +280,14 @@ impl Editor<'_> {
         let freed = freed_accessors(&json, &replaced);
         let slots = place_accessors(&mut json, &freed, added.len());
         for p in &primitives {
-            let primitive = &mut json["meshes"][p.mesh]["primitives"][p.primitive];
-            let attributes = primitive["attributes"].as_object_mut().expect("read as an object");
-            attributes.retain(|name, _| !name.starts_with("JOINTS_") && !name.starts_with("WEIGHTS_"));
-            for (name, &a) in &p.attributes {
-                attributes.insert(name.clone(), slots[a].into());
-            }
-            primitive["indices"] = slots[p.indices].into();
-            if !p.targets.is_empty() {
-                let targets: Vec<Value> = p
-                    .targets
-                    .iter()
-                    .map(|t| Value::Object(t.iter().map(|(n, &a)| (n.clone(), slots[a].into())).collect()))
-                    .collect();
-                primitive["targets"] = targets.into();
-            }
+            set_primitive(&mut json["meshes"][p.mesh]["primitives"][p.primitive], p, &slots);
         }
         let bin = self.rebuild_buffers(&mut json, &freed, added, &slots)?;
+        self.finish(json, bin)
+    }
+
+    /// The `.glb` of the edited `json` and binary chunk, and the images it names.
+    fn finish(&self, json: Value, bin: Vec<u8>) -> Result<EditedGlb, RigError> {
         let images = self.external_images(&json)?;
         let json_bytes = serde_json::to_vec(&json).map_err(|e| RigError::Output(format!("JSON: {e}")))?;
         let glb = gltf::binary::Glb {

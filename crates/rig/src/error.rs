@@ -32,8 +32,15 @@ pub enum RigError {
     Buffer { path: PathBuf, buffer: usize, reason: String },
     #[error("{path}: no skinned mesh (no node has both a mesh and a skin); desal needs a rigged body")]
     NoSkin { path: PathBuf },
-    #[error("{path}: no skinned mesh or node is called '{wanted}'; the skinned meshes are: {names}")]
+    #[error(
+        "{path}: mesh = '{wanted}' names no skinned mesh or mesh below a bone (by mesh name, node name or mesh index); the meshes are: {names}"
+    )]
     NoSuchMesh { path: PathBuf, wanted: String, names: String },
+    /// A `[dataset.rig.meshes."NAME"]` whose name is none of the simplified meshes'.
+    #[error(
+        "{path}: rig.meshes names '{wanted}', which is no mesh desal simplifies here (by mesh name, node name or mesh index); the meshes are: {names}"
+    )]
+    NoSuchMeshOverride { path: PathBuf, wanted: String, names: String },
     #[error("{path}: mesh '{mesh}' primitive {primitive}: {reason}")]
     Primitive { path: PathBuf, mesh: String, primitive: usize, reason: String },
     #[error(

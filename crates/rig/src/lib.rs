@@ -45,13 +45,13 @@ pub mod write;
 use desal_mesh::math::Mat4;
 use desal_mesh::{PoseSet, Vec3};
 
-pub use edit::{EditedGlb, ExternalImage, SourceDocument, write_edited};
+pub use edit::{EditedGlb, ExternalImage, MSFT_LOD, SourceDocument, write_edited, write_lods};
 pub use error::RigError;
 pub use model::{
     Animation, Channel, Influences, Interpolation, LocalTransform, Node, PrimitiveSpan, Rig, Skin,
     SkinnedMesh,
 };
-pub use parts::{PartsConfig, dominant_joint_parts};
+pub use parts::{PartsConfig, dominant_joint_parts, with_part_tree};
 pub use pose::{
     Frame, FrameConfig, MAX_FRAMES, MAX_POSE_NODES, MAX_POSE_VERTICES, PoseSource, joint_matrices,
     sample_frames, skin_points,

@@ -2,6 +2,12 @@
 //! too few vertices give theirs to the parent joint (bottom-up, so a chain of small
 //! joints such as finger bones ends in the hand), so that every part can carry stage 1's
 //! rigid fit. A root part that stays too small goes to its largest child part.
+//!
+//! The labels carry their parts' tree (each part's parent is the part of its joint's
+//! nearest ancestor joint that has one), so that a part a simplification leaves without
+//! three non-collinear vertices joins its parent instead of failing the fit
+//! (`PartLabels::merge_unfittable_parts`, issue 42, item 8). A labels artifact stores no
+//! tree: [`with_part_tree`] gives it back from the rig and the part names.
 
 use desal_mesh::PartLabels;
 
@@ -81,5 +87,52 @@ pub fn dominant_joint_parts(rig: &Rig, influences: &Influences, config: &PartsCo
     }
     let labels = dominant.iter().map(|&j| part_of_joint[resolve(j, &owner)]).collect();
     let names = keeps.iter().map(|&j| rig.joint_name(j)).collect();
-    PartLabels::try_new(labels, names).expect("every part id names a kept joint with vertices")
+    PartLabels::try_new(labels, names)
+        .and_then(|l| l.with_parents(tree_of_joints(rig, &keeps)))
+        .expect("every part id names a kept joint with vertices, and joints form a tree")
+}
+
+/// `labels` (a rig's dominant-joint parts, e.g. read back from a labels artifact) with
+/// their tree: part `k` is the joint of the `k`-th part name, found in joint order (part
+/// ids follow joint order, so the names are a subsequence of the joint names; with two
+/// joints of one name the first unused one is taken). Labels whose names are not such a
+/// subsequence come back without a tree, as a user's labels.
+pub fn with_part_tree(rig: &Rig, labels: PartLabels) -> PartLabels {
+    let mut joints = Vec::with_capacity(labels.part_count());
+    let mut next = 0;
+    for name in &labels.names {
+        match (next..rig.skin.joints.len()).find(|&j| rig.joint_name(j) == *name) {
+            Some(j) => {
+                joints.push(j);
+                next = j + 1;
+            }
+            None => return labels,
+        }
+    }
+    let tree = tree_of_joints(rig, &joints);
+    labels.clone().with_parents(tree).unwrap_or(labels)
+}
+
+/// The parent part of each part whose joint is `joints[k]`: the part of the nearest
+/// ancestor joint that has one, `None` for a part with none above it.
+fn tree_of_joints(rig: &Rig, joints: &[usize]) -> Vec<Option<u32>> {
+    let parents = rig.joint_parents();
+    let mut part_of_joint = vec![None; rig.skin.joints.len()];
+    for (k, &j) in joints.iter().enumerate() {
+        part_of_joint[j] = Some(k as u32);
+    }
+    joints
+        .iter()
+        .map(|&j| {
+            let mut at = parents[j];
+            // A joint chain has no cycle (`check_tree`), so the walk ends at a root.
+            while let Some(a) = at {
+                if let Some(part) = part_of_joint[a] {
+                    return Some(part);
+                }
+                at = parents[a];
+            }
+            None
+        })
+        .collect()
 }

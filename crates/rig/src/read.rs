@@ -63,8 +63,10 @@ const MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
 /// Options of [`read_rig`].
 #[derive(Debug, Clone, Default)]
 pub struct ReadOptions {
-    /// Only this skinned mesh, by mesh or node name; `None`: every skinned mesh of the file.
-    pub mesh: Option<String>,
+    /// Only these meshes, each by mesh name, node name or mesh index (`"3"`): skinned
+    /// meshes, and meshes below a bone (read rigid); `None`: every skinned mesh and
+    /// every mesh below a bone. At least one must be skinned (its skin carries the rest).
+    pub mesh: Option<Vec<String>>,
 }
 
 /// Reads the rig in `path` (`.glb`, or `.gltf` whose buffers are beside it or embedded).
@@ -158,9 +160,7 @@ impl Reader<'_> {
         let mut rig =
             Rig { weight_sums, nodes, scenes, scene, mesh_node, meshes: parts, skin, animations, mesh };
         check_tree(&self.path, &rig)?;
-        if options.mesh.is_none() {
-            self.add_rigid_meshes(&mut rig)?;
-        }
+        self.add_rigid_meshes(&mut rig, options.mesh.as_deref())?;
         Ok(rig)
     }
 
@@ -170,7 +170,9 @@ impl Reader<'_> {
     /// bind matrices put them, and in every pose the mesh follows that joint as the node
     /// tree makes it. A mesh carried by a node not below a joint does not move with the
     /// skeleton and passes through unchanged, as does one already read.
-    fn add_rigid_meshes(&self, rig: &mut Rig) -> Result<(), RigError> {
+    ///
+    /// With `wanted` (`ReadOptions::mesh`), only the meshes it names.
+    fn add_rigid_meshes(&self, rig: &mut Rig, wanted: Option<&[String]>) -> Result<(), RigError> {
         let parents = rig.parents();
         let mut joint_of_node = std::collections::HashMap::new();
         for (j, &n) in rig.skin.joints.iter().enumerate() {
@@ -186,6 +188,9 @@ impl Reader<'_> {
                 above = parents[n];
             }
             let Some(anchor) = above else { continue };
+            if wanted.is_some_and(|names| !names.iter().any(|w| names_mesh(w, &mesh, &node))) {
+                continue;
+            }
             if !seen.insert(mesh.index()) {
                 continue;
             }
@@ -242,8 +247,9 @@ impl Reader<'_> {
     }
 
     /// The skinned meshes to simplify, each with the first node that carries it and its
-    /// skin, in node order: every one (a mesh carried by several nodes once), or the one
-    /// [`ReadOptions::mesh`] names by mesh or node name.
+    /// skin, in node order: every one (a mesh carried by several nodes once), or those
+    /// [`ReadOptions::mesh`] names by mesh name, node name or mesh index. A name that
+    /// names neither a skinned mesh nor a mesh below a bone is refused, listing them.
     fn pick_skinned_meshes(
         &self,
         options: &ReadOptions,
@@ -257,20 +263,68 @@ impl Reader<'_> {
             format!("'{}' (node '{}')", mesh_name(m), n.name().unwrap_or("unnamed"))
         };
         if let Some(wanted) = &options.mesh {
-            let names = skinned.iter().map(label).collect::<Vec<_>>().join(", ");
-            let chosen = skinned
-                .iter()
-                .position(|(n, m, _)| m.name() == Some(wanted) || n.name() == Some(wanted))
-                .ok_or_else(|| RigError::NoSuchMesh {
+            let rigid = self.meshes_below_bones();
+            let mut names = skinned.iter().map(label).collect::<Vec<_>>();
+            names.extend(rigid.iter().map(|(n, m)| {
+                format!("'{}' (node '{}', below a bone)", mesh_name(m), n.name().unwrap_or("unnamed"))
+            }));
+            let known = |w: &str| {
+                skinned.iter().any(|(n, m, _)| names_mesh(w, m, n))
+                    || rigid.iter().any(|(n, m)| names_mesh(w, m, n))
+            };
+            if let Some(unknown) = wanted.iter().find(|w| !known(w)) {
+                return Err(RigError::NoSuchMesh {
                     path: self.path.clone(),
-                    wanted: wanted.clone(),
-                    names,
-                })?;
-            skinned = vec![skinned.swap_remove(chosen)];
+                    wanted: unknown.clone(),
+                    names: names.join(", "),
+                });
+            }
+            skinned.retain(|(n, m, _)| wanted.iter().any(|w| names_mesh(w, m, n)));
+            if skinned.is_empty() {
+                return Err(RigError::NoSuchMesh {
+                    path: self.path.clone(),
+                    wanted: format!(
+                        "{} (below a bone only: list a skinned mesh too, whose skin they follow)",
+                        wanted.join("', '")
+                    ),
+                    names: names.join(", "),
+                });
+            }
         }
         let mut seen = std::collections::BTreeSet::new();
         skinned.retain(|(_, m, _)| seen.insert(m.index()));
         Ok(skinned.into_iter().map(|(n, m, s)| (n.index(), m, s)).collect())
+    }
+
+    /// Every mesh carried by a node without a skin that has a skin's joint above it,
+    /// with that node: the candidates of [`Self::add_rigid_meshes`].
+    fn meshes_below_bones(&self) -> Vec<(gltf::Node<'_>, gltf::Mesh<'_>)> {
+        let joints: std::collections::BTreeSet<usize> =
+            self.document.skins().flat_map(|s| s.joints().map(|j| j.index()).collect::<Vec<_>>()).collect();
+        let mut parent = vec![None; self.document.nodes().len()];
+        for node in self.document.nodes() {
+            for child in node.children() {
+                parent[child.index()] = Some(node.index());
+            }
+        }
+        self.document
+            .nodes()
+            .filter(|n| n.skin().is_none())
+            .filter_map(|n| Some((n.clone(), n.mesh()?)))
+            .filter(|(n, _)| {
+                // `check_tree` has refused cycles by the time a rigid mesh is added, but
+                // this runs before: a walk is bounded by the node count.
+                let mut above = parent[n.index()];
+                for _ in 0..parent.len() {
+                    match above {
+                        Some(a) if joints.contains(&a) => return true,
+                        Some(a) => above = parent[a],
+                        None => return false,
+                    }
+                }
+                false
+            })
+            .collect()
     }
 
     fn read_skin(&self, skin: &gltf::Skin<'_>, nodes: &[Node]) -> Result<Skin, RigError> {
@@ -935,6 +989,12 @@ fn decode_base64(text: &str) -> Option<Vec<u8>> {
             .with_decode_allow_trailing_bits(true),
     );
     LENIENT.decode(text).ok()
+}
+
+/// True when `wanted` (an entry of [`ReadOptions::mesh`]) names `mesh` carried by `node`:
+/// its mesh name, its node's name, or its mesh index written in decimal.
+fn names_mesh(wanted: &str, mesh: &gltf::Mesh<'_>, node: &gltf::Node<'_>) -> bool {
+    mesh.name() == Some(wanted) || node.name() == Some(wanted) || wanted == mesh.index().to_string()
 }
 
 #[cfg(test)]

@@ -105,9 +105,23 @@ pub fn simplified_rig_with(
     let mut faces_of: Vec<Vec<[(u32, u32); 3]>> = vec![Vec::new(); mesh.primitives.len().max(1)];
     let charts = uv_charts(mesh);
     let mut cross_chart_faces = 0;
+    // A face the simplification kept as it was keeps its input corners (so a mesh kept
+    // whole comes back with every split vertex); others pick theirs.
+    let welded_of = |split: u32| weld.split_to_welded[split as usize] as usize;
+    let mut input_faces = std::collections::HashMap::with_capacity(mesh.triangles.len());
+    for t in &mesh.triangles {
+        let mut key = t.map(welded_of);
+        key.sort_unstable();
+        input_faces.entry(key).or_insert(*t);
+    }
     for face in simplified.faces {
         let welded = face.map(|s| simplified.simp_to_welded[s as usize] as usize);
-        let copies = pick_copies(mesh, welded.map(|w| weld.copies_of(w)));
+        let mut key = welded;
+        key.sort_unstable();
+        let copies = match input_faces.get(&key) {
+            Some(t) => welded.map(|w| *t.iter().find(|&&c| welded_of(c) == w).expect("the same corners")),
+            None => pick_copies(mesh, welded.map(|w| weld.copies_of(w))),
+        };
         if let Some(charts) = &charts {
             cross_chart_faces +=
                 usize::from(copies.iter().any(|&c| charts[c as usize] != charts[copies[0] as usize]));

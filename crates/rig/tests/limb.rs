@@ -485,10 +485,17 @@ fn every_skinned_mesh_is_read_and_mesh_picks_one() {
     let one = read(&bytes).unwrap();
     assert_eq!((one.meshes.len(), one.mesh_node), (1, 2), "one mesh, from its first node");
     let picked =
-        read_rig_from(Path::new("limb.glb"), &bytes, &ReadOptions { mesh: Some("body2".into()) }).unwrap();
+        read_rig_from(Path::new("limb.glb"), &bytes, &ReadOptions { mesh: Some(vec!["body2".into()]) })
+            .unwrap();
     assert_eq!(picked.mesh_node, 3);
-    let m = message(read_rig_from(Path::new("limb.glb"), &bytes, &ReadOptions { mesh: Some("arm".into()) }));
-    assert!(m.contains("no skinned mesh or node is called 'arm'"), "{m}");
+    let m = message(read_rig_from(
+        Path::new("limb.glb"),
+        &bytes,
+        &ReadOptions { mesh: Some(vec!["arm".into()]) },
+    ));
+    assert!(m.contains("limb.glb: mesh = 'arm' names no skinned mesh"), "{m}");
+    let by_index = ReadOptions { mesh: Some(vec!["0".into()]) };
+    assert_eq!(read_rig_from(Path::new("limb.glb"), &bytes, &by_index).unwrap().mesh_node, 2, "mesh 0");
 }
 
 /// The limb with a second skinned mesh, `sleeve`: the limb's own accessors (so the same

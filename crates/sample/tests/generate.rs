@@ -202,7 +202,7 @@ fn the_avatar_is_three_textured_meshes_on_one_skin() {
     assert_eq!(names, ["Body", "Eyes", "Hair"]);
     assert!(rig.meshes.iter().all(|m| m.skin == Some(0)), "one shared skin");
     assert!(rig.mesh.influences.max_influences() <= 4);
-    let body_options = desal_rig::ReadOptions { mesh: Some("Body".into()) };
+    let body_options = desal_rig::ReadOptions { mesh: Some(vec!["Body".into()]) };
     let body = desal_rig::read_rig_from(&path, &bytes, &body_options).unwrap();
     assert_eq!(desal_rig::Weld::new(&body.mesh).welded_count(), 13380, "the body welds to the template");
     let json = document.json();

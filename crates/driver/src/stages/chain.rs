@@ -13,6 +13,7 @@ use desal_mesh::{PartLabels, PoseSet, Progress};
 
 use super::fit::{self, FitParams, FitSummary};
 use super::map::{self, MapSummary};
+use super::meshes::{self, MeshPlan};
 use super::runner::{Stage, Staged, Store};
 use super::saliency::{self, SaliencyParams, SaliencySummary};
 use super::seams::SeamEdges;
@@ -37,6 +38,9 @@ pub struct ChainInput<'a> {
     pub hashes: Option<(ContentHash, ContentHash)>,
     /// Handed to stage 3 as given: the caller asks [`SimplifyParams::keeps_seams`].
     pub seams: Option<&'a SeamEdges>,
+    /// A rig's meshes under one budget (`stages::meshes`): stage 3 runs per rule and the
+    /// plan enters its key; `None`: one run.
+    pub meshes: Option<&'a MeshPlan>,
 }
 
 impl std::fmt::Debug for ChainInput<'_> {
@@ -44,6 +48,7 @@ impl std::fmt::Debug for ChainInput<'_> {
         f.debug_struct("ChainInput")
             .field("hashes", &self.hashes)
             .field("seams", &self.seams)
+            .field("meshes", &self.meshes)
             .finish_non_exhaustive()
     }
 }
@@ -93,25 +98,43 @@ pub fn chain(
     )?;
 
     // Stage 3: the template simplified by the configured method, keeping the seams it
-    // is handed as polylines (keyed by their content).
+    // is handed as polylines (keyed by their content); a rig's meshes by their plan.
     let simplified = store.stage(
         Stage::Simplify,
         || {
             let (poses, labels) = input.hashes()?;
             let seams = input.seams.map(|s| s.hash);
-            settings.simplify.key_with_seams(poses, salient.hash()?, labels, seams)
+            let mut key = settings.simplify.key_with_seams(poses, salient.hash()?, labels, seams)?;
+            if let Some(plan) = input.meshes {
+                key.inputs.push(("meshes".into(), plan.hash()));
+            }
+            Ok(key)
         },
         &[],
         || {
-            simplify::run(
-                settings.simplify,
-                settings.saliency,
-                set()?,
-                labels()?,
-                &salient.body()?.weights,
-                input.seams.map(|s| s.edges.as_slice()),
-                progress,
-            )
+            let seams = input.seams.map(|s| s.edges.as_slice());
+            let weights = &salient.body()?.weights;
+            match input.meshes {
+                Some(plan) => meshes::run(
+                    plan,
+                    settings.simplify,
+                    settings.saliency,
+                    set()?,
+                    labels()?,
+                    weights,
+                    seams,
+                    progress,
+                ),
+                None => simplify::run(
+                    settings.simplify,
+                    settings.saliency,
+                    set()?,
+                    labels()?,
+                    weights,
+                    seams,
+                    progress,
+                ),
+            }
         },
     )?;
 

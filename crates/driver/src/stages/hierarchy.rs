@@ -329,6 +329,7 @@ fn level_pose_set<'a>(
     let labels = PartLabels {
         labels: p.coarse_to_orig.iter().map(|&o| labels.labels[o as usize]).collect(),
         names: labels.names.clone(),
+        parents: labels.parents.clone(),
     };
     Ok((Cow::Owned(set), Cow::Owned(labels)))
 }
@@ -395,7 +396,13 @@ pub fn compute_level(
     // Stages 1–4 on this level's pose set, as on level 0, in memory: the level is one
     // cached stage.
     let params = settings.simplify_params(step);
-    let input = ChainInput { set: &|| Ok(&fine), labels: &|| Ok(&fine_labels), hashes: None, seams: None };
+    let input = ChainInput {
+        set: &|| Ok(&fine),
+        labels: &|| Ok(&fine_labels),
+        hashes: None,
+        seams: None,
+        meshes: None,
+    };
     let stages = chain(&mut Memory, ChainSettings { simplify: &params, ..settings.chain }, &input, progress)?;
     let coarse_to_fine = stages.map.body()?.simp_to_orig.clone();
     let faces = stages.simplified.body()?.faces.clone();

@@ -10,7 +10,9 @@ pub mod chain;
 pub mod fit;
 pub mod hierarchy;
 pub mod ingest;
+pub mod lods;
 pub mod map;
+pub mod meshes;
 pub mod model;
 pub mod parts;
 pub mod rig;
@@ -80,6 +82,9 @@ pub struct DatasetStages {
     pub map: Staged<MapV1, MapSummary>,
     /// One per coarse level, level 1 first (empty without `[dataset.hierarchy]`).
     pub hierarchy: Vec<Staged<HierarchyLevelV1, LevelSummary>>,
+    /// A rig's LOD chain (`lods` in `[dataset.rig]`), level 1 first: each level's map
+    /// into the pose set (empty without one).
+    pub lods: Vec<Staged<desal_io::artifact::MapV1, lods::LodSummary>>,
     /// The rig the poses came from, for a `[dataset.rig]` dataset (`simplified.glb`).
     pub rig: Option<rig::RigSource>,
     /// The model the poses came from, for a `[dataset.model]` dataset (`model.npz`).
@@ -102,9 +107,16 @@ impl DatasetStages {
         get_or_try_init(&self.pose_set, || Ok(self.poses.body()?.to_pose_set()?))
     }
 
-    /// The part labels, decoded on first use.
+    /// The part labels, decoded on first use; a rig's with its joints' tree
+    /// ([`rig::RigSource::with_part_tree`]).
     pub fn part_labels(&self) -> Result<&PartLabels> {
-        get_or_try_init(&self.part_labels, || Ok(self.labels.body()?.to_labels()?))
+        get_or_try_init(&self.part_labels, || {
+            let labels = self.labels.body()?.to_labels()?;
+            match &self.rig {
+                Some(rig) => rig.with_part_tree(labels),
+                None => Ok(labels),
+            }
+        })
     }
 
     /// Input and output counts, from the stages' summaries (no body is decoded).
@@ -173,8 +185,17 @@ pub fn run_stages(
         ),
     };
     let labels_cell = OnceCell::new();
-    let part_labels =
-        || -> Result<&PartLabels> { get_or_try_init(&labels_cell, || Ok(labels.body()?.to_labels()?)) };
+    // A rig's labels carry its joints' tree, so that a part simplification leaves
+    // unfittable joins its parent (issue 42, item 8).
+    let part_labels = || -> Result<&PartLabels> {
+        get_or_try_init(&labels_cell, || {
+            let decoded = labels.body()?.to_labels()?;
+            match &inputs.rig {
+                Some(rig) => rig.to_owned().with_part_tree(decoded),
+                None => Ok(decoded),
+            }
+        })
+    };
 
     // Stages 1–4, written once (`chain.rs`); stage 3 keeps a rig's attribute seams as
     // polylines unless told to ignore them.
@@ -184,11 +205,17 @@ pub fn run_stages(
         }
         _ => None,
     };
+    // A rig's meshes under one budget: their plan (`meshes.rs`), when they need one.
+    let mesh_plan = match &inputs.rig {
+        Some(rig) => rig.mesh_plan(set()?, inputs.simplify.target())?,
+        None => None,
+    };
     let input = ChainInput {
         set: &set,
         labels: &part_labels,
         hashes: Some((poses.hash()?, labels.hash()?)),
         seams: seam_edges.as_ref(),
+        meshes: mesh_plan.as_ref(),
     };
     let settings = ChainSettings { fit: inputs.fit, saliency: inputs.saliency, simplify: inputs.simplify };
     let Chain { fit, saliency, simplified, map } = chain(runner, settings, &input, progress)?;
@@ -203,8 +230,18 @@ pub fn run_stages(
         None => Vec::new(),
     };
 
+    // A rig's LOD chain: one stage per level, each from the level before.
+    let lod_levels = match &inputs.rig {
+        Some(rig) if rig.params.lods.is_some() => {
+            let settings = lods::LodSettings { chain: settings, fractions: rig.params.lod_fractions()? };
+            lods::lod_levels(runner, &settings, &input, poses.summary.faces, progress)?
+        }
+        _ => Vec::new(),
+    };
+
     Ok(DatasetStages {
         hierarchy,
+        lods: lod_levels,
         rig: inputs.rig.map(|r| r.to_owned()),
         model: inputs.model.map(|m| m.to_owned()),
         poses,

@@ -10,6 +10,7 @@
 //! Keys: the rig file's bytes (never its path), `desal_rig::VERSION`, and every resolved
 //! parameter below, destructured exhaustively.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
@@ -50,10 +51,13 @@ pub enum RigParts {
 pub struct RigParams {
     /// The `.glb` or `.gltf` file (relative to the pipeline file).
     pub file: String,
-    /// One skinned mesh, by mesh or node name; unset: every skinned mesh of the file (a
-    /// mesh carried by several nodes once), simplified together.
-    #[serde(default)]
-    pub mesh: Option<String>,
+    /// The meshes to simplify, `"A"` or `["A", "B"]`, each by mesh name, node name or
+    /// mesh index (skinned, or below a bone); the others pass through unchanged. Unset:
+    /// every skinned mesh of the file (a mesh carried by several nodes once) and every
+    /// mesh below a bone. One name is written back as a string, so keys made before
+    /// lists existed still match.
+    #[serde(default, deserialize_with = "one_or_many", serialize_with = "one_or_many_out")]
+    pub mesh: Option<Vec<String>>,
     /// Where the frames come from. Default `animations`.
     #[serde(default)]
     pub poses: PosesFrom,
@@ -81,6 +85,18 @@ pub struct RigParams {
     /// existed still match (it shapes the output only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_influences: Option<MaxInfluences>,
+    /// A LOD chain: each level's fraction of the original faces, strictly decreasing, in
+    /// (0, 1] (`stages::lods`). Each level is simplified from the one before (subset
+    /// placement, so they nest) and written as `simplified-lod<k>.glb`, all of them with
+    /// the input as `simplified-lods.glb` (`MSFT_lod`). Unset: no chain. Left out of the
+    /// key's parameters when unset, as `max_influences`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lods: Option<Vec<f64>>,
+    /// `[dataset.rig.meshes."NAME"]`: a mesh's own ratio by mesh name, node name or mesh
+    /// index (`ratio = 1.0` keeps it whole; `stages::meshes`). Left out of the key's
+    /// parameters when empty.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub meshes: BTreeMap<String, crate::stages::meshes::MeshOverride>,
 }
 
 /// `max_influences = N | "all"`.
@@ -101,6 +117,35 @@ pub enum AllInfluences {
 /// Influences per vertex of the simplified rig when `max_influences` is unset (issue 42,
 /// item 5): engines skin 4.
 pub const DEFAULT_MAX_INFLUENCES: usize = 4;
+
+/// `mesh = "A"` or `mesh = ["A", "B"]`.
+fn one_or_many<'de, D: serde::Deserializer<'de>>(
+    deserializer: D,
+) -> std::result::Result<Option<Vec<String>>, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum OneOrMany {
+        One(String),
+        Many(Vec<String>),
+    }
+    // `null` (a producer record of no `mesh`) is none.
+    Ok(Option::<OneOrMany>::deserialize(deserializer)?.map(|names| match names {
+        OneOrMany::One(name) => vec![name],
+        OneOrMany::Many(names) => names,
+    }))
+}
+
+/// [`RigParams::mesh`] as written: one name as a string, several as a list.
+fn one_or_many_out<S: serde::Serializer>(
+    mesh: &Option<Vec<String>>,
+    serializer: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    match mesh.as_deref() {
+        Some([one]) => serializer.serialize_some(one),
+        Some(many) => serializer.serialize_some(many),
+        None => serializer.serialize_none(),
+    }
+}
 
 fn default_frames() -> usize {
     FrameConfig::default().frames
@@ -150,6 +195,24 @@ impl RigParams {
         Ok(desal_rig::WeightOptions { max_influences })
     }
 
+    /// The LOD chain's fractions, checked (`stages::lods::check_fractions`); empty
+    /// without `lods`.
+    pub fn lod_fractions(&self) -> Result<&[f64]> {
+        match &self.lods {
+            Some(lods) => {
+                crate::stages::lods::check_fractions(lods)?;
+                Ok(lods)
+            }
+            None => Ok(&[]),
+        }
+    }
+
+    /// Checks every `[dataset.rig.meshes."NAME"]` (a ratio in (0, 1]); whether each
+    /// names a mesh is known once the rig is read.
+    pub fn check_mesh_overrides(&self) -> Result<()> {
+        self.meshes.iter().try_for_each(|(name, o)| o.check(name))
+    }
+
     pub fn parts_config(&self) -> Result<desal_rig::PartsConfig> {
         if self.min_part_vertices < 3 {
             bail!("rig.min_part_vertices must be at least 3 (a part needs a rigid fit)");
@@ -170,6 +233,16 @@ pub struct RigInput<'a> {
 pub struct RigSource {
     pub file: PathBuf,
     pub params: RigParams,
+}
+
+impl RigSource {
+    /// `labels`, this rig's dominant-joint parts (as a labels artifact stores them),
+    /// with their joints' tree (`desal_rig::with_part_tree`): a part a simplification
+    /// leaves without three non-collinear vertices then joins its parent joint's part.
+    pub fn with_part_tree(&self, labels: desal_mesh::PartLabels) -> Result<desal_mesh::PartLabels> {
+        let rig = desal_rig::read_rig(&self.file, &ReadOptions { mesh: self.params.mesh.clone() })?;
+        Ok(desal_rig::with_part_tree(&rig, labels))
+    }
 }
 
 impl RigInput<'_> {
@@ -223,6 +296,38 @@ impl RigInput<'_> {
 
     pub fn hints(&self) -> Vec<(String, String)> {
         vec![("rig".into(), crate::stages::ingest::file_name(self.file))]
+    }
+
+    /// The plan of stage 3 over the rig's meshes (`stages::meshes::MeshPlan`) for `set`,
+    /// its pose set, under `target`; `None` when stage 3 runs once. An override naming
+    /// no mesh is refused, naming the file.
+    pub fn mesh_plan(
+        &self,
+        set: &desal_mesh::PoseSet,
+        target: desal_simplify::Target,
+    ) -> Result<Option<crate::stages::meshes::MeshPlan>> {
+        let rig = desal_rig::read_rig(self.file, &ReadOptions { mesh: self.params.mesh.clone() })?;
+        let weld = desal_rig::Weld::new(&rig.mesh);
+        if weld.welded_count() != set.vertex_count() {
+            bail!("{}: the rig has changed since its pose set was made", self.file.display());
+        }
+        let welded_end = |split_end: u32| {
+            (split_end as usize).checked_sub(1).map_or(0, |last| weld.split_to_welded[last] + 1)
+        };
+        let meshes: Vec<crate::stages::meshes::MeshOfRig> = rig
+            .meshes
+            .iter()
+            .map(|part| {
+                let mut aliases = vec![part.name.clone(), part.mesh.to_string()];
+                aliases.extend(rig.nodes[part.node].name.clone());
+                crate::stages::meshes::MeshOfRig {
+                    name: part.name.clone(),
+                    aliases,
+                    vertices: [welded_end(part.vertices.start), welded_end(part.vertices.end)],
+                }
+            })
+            .collect();
+        crate::stages::meshes::MeshPlan::new(self.file, &meshes, set, target, &self.params.meshes)
     }
 
     /// Reads the rig, keeping its whole document, and poses it at its frames: what the
@@ -328,6 +433,101 @@ pub fn source_of_pose_set(producer: &Producer, poses: &Path, file: &Path) -> Res
     Ok(RigSource { file: file.to_owned(), params })
 }
 
+/// A LOD chain's files: each level's rig (`simplified-lod<k>.glb`), all levels with the
+/// input in one (`simplified-lods.glb`, `MSFT_lod`), and each level's figures.
+#[derive(Debug, Clone)]
+pub struct LodGlbs {
+    pub levels: Vec<EditedGlb>,
+    pub combined: EditedGlb,
+    pub figures: Vec<LodFigures>,
+}
+
+/// One row of [`SimplifiedRigSummary::lods`]: the level's stage figures and its rig's.
+#[derive(Debug, Clone, Serialize)]
+pub struct LodFigures {
+    #[serde(flatten)]
+    pub level: crate::stages::lods::LodSummary,
+    /// `simplified-lod<k>.glb` (`.vrm` for a `.vrm`).
+    pub file: String,
+    /// Vertices and faces of the written primitives (seam copies included).
+    pub output_vertices: usize,
+    pub output_faces: usize,
+    pub seam_vertices: usize,
+    pub cross_chart_faces: usize,
+    /// `MSFT_screencoverage` of the level in `simplified-lods.glb`.
+    pub screen_coverage: f64,
+}
+
+/// The screen coverage (share of the screen) down to which each level of
+/// `simplified-lods.glb` is shown, the input first: level `k` until the coverage falls
+/// below half the next level's face fraction, so that the faces per screen area stay
+/// about even; the coarsest level is never culled (0). A starting point for engines that
+/// read `MSFT_screencoverage` (Babylon.js); they tune their own.
+pub fn screen_coverage(fractions: &[f64]) -> Vec<f64> {
+    let mut coverage: Vec<f64> = fractions.iter().map(|f| 0.5 * f).collect();
+    coverage.push(0.0);
+    coverage
+}
+
+/// The file name of LOD level `level` (`simplified-lod<k>`) or of the chain (`None`:
+/// `simplified-lods`), with the input's extension (`.vrm` for a `.vrm`).
+pub fn lod_file_name(source: &RigSource, level: Option<usize>) -> String {
+    let extension = simplified_file_name(source).rsplit('.').next().unwrap_or("glb");
+    match level {
+        Some(k) => format!("simplified-lod{k}.{extension}"),
+        None => format!("simplified-lods.{extension}"),
+    }
+}
+
+/// The rigs of a LOD chain (`levels`: each level's map into the pose set, finest
+/// first, with its summary): one edited document per level and the chain in one, each
+/// level's weights exact (subset placement) and capped at `max_influences`.
+pub fn lod_glbs(
+    source: &RigSource,
+    levels: &[(&MapV1, &crate::stages::lods::LodSummary)],
+) -> Result<LodGlbs> {
+    let input = RigInput { file: &source.file, params: &source.params };
+    let options = source.params.weight_options()?;
+    let (rig, document, posed) = input.load_with_document()?;
+    let template = posed.poses.template_positions();
+    let mut rigs = Vec::with_capacity(levels.len());
+    let mut files = Vec::with_capacity(levels.len());
+    let mut figures = Vec::with_capacity(levels.len());
+    let fractions: Vec<f64> = levels.iter().map(|(_, s)| s.fraction).collect();
+    let coverage = screen_coverage(&fractions);
+    for (k, (map, summary)) in levels.iter().enumerate() {
+        let simplified = SimplifiedV1 {
+            positions: map.simp_to_orig.iter().map(|&o| template[o as usize].into()).collect(),
+            faces: map.faces.clone(),
+            simp_to_orig: map.simp_to_orig.iter().map(|&o| Some(o)).collect(),
+            placement: "subset".into(),
+            input_vertices: template.len() as u32,
+            input_faces: posed.poses.faces.len() as u32,
+            collapses: 0,
+            stop: summary.stop.clone(),
+            max_error: summary.max_error,
+            mean_error: f64::NAN,
+            edge_length_mean: f64::NAN,
+            edge_length_variance: f64::NAN,
+        };
+        let (out, report) = simplified_rig(&rig, &posed, &simplified, map, &options)
+            .with_context(|| format!("LOD level {}", k + 1))?;
+        files.push(desal_rig::write_edited(&document, &rig, &out)?);
+        figures.push(LodFigures {
+            level: (*summary).clone(),
+            file: lod_file_name(source, Some(k + 1)),
+            output_vertices: report.output_vertices,
+            output_faces: report.output_faces,
+            seam_vertices: report.seam_vertices,
+            cross_chart_faces: report.cross_chart_faces,
+            screen_coverage: coverage[k + 1],
+        });
+        rigs.push(out);
+    }
+    let combined = desal_rig::write_lods(&document, &rig, &rigs, &coverage)?;
+    Ok(LodGlbs { levels: files, combined, figures })
+}
+
 /// `simplified.glb`'s JSON sidecar (`simplified-rig.json`).
 #[derive(Debug, Clone, Serialize)]
 pub struct SimplifiedRigSummary {
@@ -344,6 +544,9 @@ pub struct SimplifiedRigSummary {
     /// (`poses.dsa`), the simplified pose set (`simplified/*.ply`, `vertex_map.txt`) and
     /// the written mesh, as `[first, end)` ranges.
     pub meshes: Vec<MeshRanges>,
+    /// The LOD chain's levels (`lods`), finest first; absent without one.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub lods: Vec<LodFigures>,
 }
 
 /// One row of [`SimplifiedRigSummary::meshes`].
@@ -419,6 +622,7 @@ pub fn simplified_glb(
         refitted_vertices: report.refitted_vertices,
         max_influences: report.max_influences,
         meshes: mesh_ranges(&rig, &posed.weld, map, &out),
+        lods: Vec::new(),
     };
     Ok((edited, summary))
 }
@@ -484,7 +688,9 @@ mod tests {
         let reference = key(&a, &base);
         assert_eq!(key(&b, &base), reference, "the same bytes under another name");
         let variants = [
-            RigParams { mesh: Some("Body".into()), ..base.clone() },
+            RigParams { mesh: Some(vec!["Body".into()]), ..base.clone() },
+            RigParams { mesh: Some(vec!["Body".into(), "Eyes".into()]), ..base.clone() },
+            RigParams { lods: Some(vec![0.5]), ..base.clone() },
             RigParams { poses: PosesFrom::Random, ..base.clone() },
             RigParams { frames: 61, ..base.clone() },
             RigParams { seed: 1, ..base.clone() },
@@ -517,6 +723,18 @@ mod tests {
                 .is_err()
         );
         assert_eq!(p.weight_options().unwrap().max_influences, Some(4), "engines skin 4");
+        let one: RigParams = toml::from_str("file = \"a.glb\"\nmesh = \"Body\"").unwrap();
+        assert_eq!(one.mesh, Some(vec!["Body".to_owned()]));
+        assert_eq!(
+            serde_json::to_value(&one).unwrap()["mesh"],
+            "Body",
+            "one name is written as before lists"
+        );
+        let two: RigParams = toml::from_str("file = \"a.glb\"\nmesh = [\"Body\", \"2\"]").unwrap();
+        assert_eq!(serde_json::to_value(&two).unwrap()["mesh"], serde_json::json!(["Body", "2"]));
+        let none: RigParams = serde_json::from_str(r#"{"file": "a.glb", "mesh": null}"#).unwrap();
+        assert_eq!(none.mesh, None, "a producer record without mesh");
+        assert!(toml::from_str::<RigParams>("file = \"a.glb\"\nmesh = 3").is_err());
         let all: RigParams = toml::from_str("file = \"a.glb\"\nmax_influences = \"all\"").unwrap();
         assert_eq!(all.weight_options().unwrap().max_influences, None);
         let eight: RigParams = toml::from_str("file = \"a.glb\"\nmax_influences = 8").unwrap();

@@ -90,6 +90,8 @@ def _json_value(what: str, name: str, value: Any) -> Any:
         return value
     if isinstance(value, (list, tuple)):
         return [_json_value(what, f"{name}[{k}]", v) for k, v in enumerate(value)]
+    if isinstance(value, dict) and all(isinstance(k, str) for k in value):
+        return {k: _json_value(what, f"{name}.{k}", v) for k, v in value.items()}
     kind = type(value).__name__
     raise InputError(f"{what}: {name}={value!r} must be a number, a str, a bool or a list, not {kind}")
 
@@ -108,6 +110,16 @@ def _options_dict(what: str, argument: str, options: Any) -> dict:
     if not isinstance(options, dict) or not all(isinstance(k, str) for k in options):
         raise InputError(f"{what}: {argument} must be a dict of [dataset.{what}] keys, not {options!r}")
     return dict(options)
+
+
+def _mesh_overrides(meshes: Any) -> Optional[dict]:
+    """``simplify_rig``'s ``meshes``: ``{name: ratio}`` as ``[dataset.rig.meshes]``'s
+    tables (``{name: {"ratio": ratio}}``), or None."""
+    if meshes is None:
+        return None
+    if not isinstance(meshes, dict) or not all(isinstance(k, str) for k in meshes):
+        raise InputError(f"rig: meshes must be a dict of mesh names to ratios, not {meshes!r}")
+    return {name: {"ratio": ratio} for name, ratio in meshes.items()}
 
 
 def _text(argument: str, value: Any) -> str:
@@ -314,7 +326,7 @@ def simplify_rig(
     placement: str = "subset",
     target_faces: Optional[int] = None,
     ratio: Optional[float] = None,
-    mesh: Optional[str] = None,
+    mesh: Union[str, Sequence[str], None] = None,
     poses: str = "animations",
     frames: Optional[int] = None,
     seed: Optional[int] = None,
@@ -325,6 +337,8 @@ def simplify_rig(
     saliency_options: Optional[dict] = None,
     simplify_options: Optional[dict] = None,
     progress: Progress = None,
+    meshes: Optional[dict] = None,
+    lods: Optional[Sequence[float]] = None,
 ) -> dict:
     """Simplifies the skinned glTF 2.0 rig ``rig`` (``.glb``/``.gltf``) and writes the
     simplified rig to ``out`` (``.glb``), as ``desal run`` does for a ``[dataset.rig]``:
@@ -333,7 +347,15 @@ def simplify_rig(
     The rig is posed by linear blend skinning at ``frames`` frames of its animations
     (``poses="animations"``), of seeded random joint turns (``"random"``) or both; its
     UV/normal seams are welded for simplification and kept in the output. Every skinned
-    mesh is simplified, together; ``mesh`` picks one. The output is the input document
+    mesh (and mesh below a bone) is simplified under one budget; ``mesh`` picks some (a
+    name or a list: mesh name, node name or mesh index), the others pass through
+    unchanged; ``meshes`` gives a mesh its own ratio (``{"Eyes": 1.0}`` keeps it whole; a
+    mesh whose share of the target is under 200 faces is kept whole unless named there);
+    ``ratio`` applies to each mesh, ``target_faces``/``target_vertices`` are totals spread
+    by error. ``lods`` (fractions of the original faces, strictly decreasing, in (0, 1])
+    also writes each level beside ``out`` as ``<stem>-lod<k><suffix>`` and all of them with
+    the input as ``<stem>-lods<suffix>`` (``MSFT_lod``), each level simplified from the one
+    before; the report's ``lods`` has each level's figures and ``lod_files`` the paths. The output is the input document
     with only the simplified primitives changed (every other mesh, material, texture,
     animation, morph target and extension kept; images the file names by a relative path
     are written beside ``out``); with ``placement="subset"`` every
@@ -358,6 +380,8 @@ def simplify_rig(
             max_degrees=max_degrees,
             min_part_vertices=min_part_vertices,
             max_influences=max_influences,
+            lods=lods,
+            meshes=_mesh_overrides(meshes),
         ),
     )
     simplify_table = _simplify_table(simplify_options, placement, target_vertices, target_faces, ratio)
