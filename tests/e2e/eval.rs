@@ -308,6 +308,7 @@ fn every_method_is_reported_under_every_measure_and_a_skip_is_said() {
             "lbs.v2v",
             "upsampling.fitted",
             "upsampling.barycentric",
+            "spikes",
             "surface"
         ]
     );
@@ -327,6 +328,11 @@ fn every_method_is_reported_under_every_measure_and_a_skip_is_said() {
     let wins = cell("lbs.v2v", 1)["wins"].as_u64().unwrap();
     assert!(wins <= 10 && cell("lbs.v2v", 1)["p"].is_f64());
     assert!(cell("surface", 1)["wins"].is_null(), "one figure per method: no sign test");
+    // Spikes are counts of faces per pose; their mean is the column's.
+    let spikes: Vec<u64> =
+        multipose["poses"].as_array().unwrap().iter().map(|p| p["spikes"].as_u64().unwrap()).collect();
+    assert_eq!(f(&cell("spikes", 1)["mean"]), spikes.iter().sum::<u64>() as f64 / spikes.len() as f64);
+    assert!(multipose["spikes_rest"].is_u64());
     let objectives: Vec<&str> =
         report["picks"].as_array().unwrap().iter().map(|p| p["objective"].as_str().unwrap()).collect();
     assert_eq!(objectives, ["hierarchy", "pose-model", "skinning", "surface"]);
@@ -340,7 +346,7 @@ fn every_method_is_reported_under_every_measure_and_a_skip_is_said() {
     let skipped = eval_ok(&pipeline, "qslim-optimal,multipose", &["--skip", "lbs,upsampling"]);
     let keys: Vec<&str> =
         skipped["measures"].as_array().unwrap().iter().map(|c| c["key"].as_str().unwrap()).collect();
-    assert_eq!(keys, ["scape.v2f", "scape.v2v", "surface"]);
+    assert_eq!(keys, ["scape.v2f", "scape.v2v", "spikes", "surface"]);
     assert!(method(&skipped, "multipose")["upsampling"].is_null());
     let md = std::fs::read_to_string(dir.path().join("out/sample/eval/eval.md")).unwrap();
     assert!(md.contains("Skipped by `--skip`: lbs, upsampling."), "{md}");

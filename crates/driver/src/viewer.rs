@@ -41,8 +41,10 @@ pub fn view_files(
         summary.simplified_vertices,
         summary.weights,
     );
-    let mut levels =
-        vec![ViewLevel { label: "input", glb: &full_glb }, ViewLevel { label: "simplified", glb: simplified_glb }];
+    let mut levels = vec![
+        ViewLevel { label: "input", glb: &full_glb },
+        ViewLevel { label: "simplified", glb: simplified_glb },
+    ];
     levels.extend(lods.iter().map(|(label, glb)| ViewLevel { label, glb }));
     let input = ViewInput { title: &title, levels: &levels, caption: &caption };
     let page = view_html(&input, three_dir_from_env().as_deref())?;

@@ -12,7 +12,9 @@
 //!   squared vertex error, by the fitted U and by COMA's barycentric U, each built on the
 //!   fold's training poses;
 //! - the plain simplification: v2f of the simplified template against the full one (one
-//!   figure per method, so no poses won and no sign test).
+//!   figure per method, so no poses won and no sign test);
+//! - spikes (issue 42, item 7): faces of the held-out deformation more than 90° from the
+//!   full surface's nearest normal, per pose.
 
 use serde::Serialize;
 
@@ -24,7 +26,7 @@ use crate::report::{MethodReport, sign_test};
 pub const OTHER_MODELS: [&str; 2] = ["scape", "lbs"];
 
 /// What `--skip` may name: the other models, `upsampling`, `surface`.
-pub const SKIPPABLE: [&str; 4] = ["scape", "lbs", "upsampling", "surface"];
+pub const SKIPPABLE: [&str; 5] = ["scape", "lbs", "upsampling", "surface", "spikes"];
 
 /// A second model's held-out errors against the full-resolution pose, for one method.
 #[derive(Debug, Clone, Serialize)]
@@ -165,6 +167,13 @@ pub fn columns(methods: &[MethodReport], model: &str, baseline: Option<usize>) -
             up(false),
             baseline,
         ));
+    }
+    if methods.iter().any(|m| m.spikes_rest.is_some()) {
+        let values = methods
+            .iter()
+            .map(|m| m.poses.iter().map(|p| p.spikes.map(|s| s as f64)).collect::<Option<Vec<f64>>>())
+            .collect();
+        columns.push(column("spikes".into(), "spikes per frame (faces > 90° off)".into(), values, baseline));
     }
     if methods.iter().any(|m| m.surface_v2f.is_some()) {
         let values = methods.iter().map(|m| m.surface_v2f.map(|v| vec![v])).collect();

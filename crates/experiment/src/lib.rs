@@ -95,7 +95,7 @@ pub struct EvalArgs {
     #[cfg_attr(feature = "cli", arg(long))]
     pub baseline: Option<String>,
     /// Measures to leave out of the opening table, comma-separated: scape and lbs (the
-    /// models measured beside --model), upsampling, surface. Every measure is on by
+    /// models measured beside --model), upsampling, surface, spikes. Every measure is on by
     /// default; eval.md names what was skipped.
     #[cfg_attr(feature = "cli", arg(long, value_delimiter = ','))]
     pub skip: Vec<String>,
@@ -237,6 +237,8 @@ struct MethodRun {
     other_models: Vec<every_measure::OtherModel>,
     /// The simplified template's v2f against the full one; `None` when skipped.
     surface_v2f: Option<f64>,
+    /// [`measure::spikes`]: in the rest pose, then per evaluated pose; `None` when skipped.
+    spikes: Option<(usize, Vec<usize>)>,
 }
 
 fn evaluate_dataset(
@@ -340,7 +342,11 @@ fn evaluate_dataset(
         }
         let surface_v2f =
             (!skipped("surface")).then(|| desal_measures::metrics::v2f(&set.raw, &full_template));
-        prepared.push((method.clone(), set, deformed, up, others, surface_v2f));
+        let spikes = (!skipped("spikes")).then(|| {
+            let run = measure::Run { simplified: &set.mapped.poses, deformed: &deformed };
+            measure::spikes(poses, &evaluated, &run, &full_surfaces)
+        });
+        prepared.push((method.clone(), set, deformed, up, (others, surface_v2f, spikes)));
     }
 
     // The model's own floor: the same model on the full-resolution set, the same folds
@@ -381,14 +387,8 @@ fn evaluate_dataset(
     let runs: Vec<MethodRun> = prepared
         .into_iter()
         .zip(measured)
-        .map(|((method, set, deformed, upsampling, other_models, surface_v2f), measured)| MethodRun {
-            method,
-            set,
-            deformed,
-            measured,
-            upsampling,
-            other_models,
-            surface_v2f,
+        .map(|((method, set, deformed, upsampling, (other_models, surface_v2f, spikes)), measured)| {
+            MethodRun { method, set, deformed, measured, upsampling, other_models, surface_v2f, spikes }
         })
         .collect();
 
@@ -581,6 +581,7 @@ fn method_report(
             in_sample: run.measured.in_sample[k],
             held_out: run.measured.held_out[k],
             upsampling: run.upsampling.as_ref().map(|u| u[k]),
+            spikes: run.spikes.as_ref().map(|(_, per_pose)| per_pose[k]),
         })
         .collect();
     let in_sample = &run.deformed.models[0];
@@ -607,6 +608,7 @@ fn method_report(
         upsampling: run.upsampling.as_ref().map(|u| upsampling::summarise(u, fitted)),
         other_models: run.other_models.clone(),
         surface_v2f: run.surface_v2f,
+        spikes_rest: run.spikes.as_ref().map(|(rest, _)| *rest),
         versus_baseline: None,
         poses: records,
         models: run.deformed.models.clone(),

@@ -198,10 +198,17 @@ impl RunSeeds {
 }
 
 /// Per run, the target of its simplified template and where its queries start.
-fn run_targets(full: &PoseSet, full_template: &Target, runs: &[Run]) -> (Vec<Target<'static>>, Vec<RunSeeds>) {
+fn run_targets(
+    full: &PoseSet,
+    full_template: &Target,
+    runs: &[Run],
+) -> (Vec<Target<'static>>, Vec<RunSeeds>) {
     let templates: Vec<Target> = runs.iter().map(|run| Target::new(run.simplified.template_mesh())).collect();
-    let seeds =
-        runs.iter().zip(&templates).map(|(run, template)| RunSeeds::new(full, full_template, run, template)).collect();
+    let seeds = runs
+        .iter()
+        .zip(&templates)
+        .map(|(run, template)| RunSeeds::new(full, full_template, run, template))
+        .collect();
     (templates, seeds)
 }
 
@@ -299,6 +306,45 @@ pub fn held_out_vs_full(
     (0..runs.len()).map(|r| per_pose.iter().map(|pose| pose[r]).collect()).collect()
 }
 
+/// Issue 42, item 7: the simplified faces of `positions` (with `faces`) whose normal turns
+/// more than 90° from the normal of the full surface's face nearest to their centroid
+/// (`full` posed as `surface` indexes it): spikes and folds a viewer shows as dark or
+/// inside-out triangles. Faces of zero area are not counted.
+pub fn spike_count(positions: &[Vec3], faces: &[Face], full: &TriMesh, surface: &SurfaceIndex) -> usize {
+    faces
+        .par_iter()
+        .filter(|&&[a, b, c]| {
+            let [a, b, c] = [a, b, c].map(|v| positions[v as usize]);
+            let normal = (b - a).cross(&(c - a));
+            if normal.norm_squared() == 0.0 {
+                return false;
+            }
+            let centroid = (a + b + c) / 3.0;
+            surface.nearest(&centroid).is_some_and(|(f, _)| normal.dot(&full.face_normal(f as usize)) < 0.0)
+        })
+        .count()
+}
+
+/// [`spike_count`] of a run: in the rest pose (the simplified template against the full
+/// one), then per pose of `evaluated`, its held-out deformation against the full pose.
+pub fn spikes(
+    full: &PoseSet,
+    evaluated: &[usize],
+    run: &Run,
+    full_surfaces: &[SurfaceIndex],
+) -> (usize, Vec<usize>) {
+    let faces = &run.simplified.faces;
+    let at = |positions: &[Vec3], pose: usize| {
+        spike_count(positions, faces, &full.pose_mesh(pose), &full_surfaces[pose])
+    };
+    let rest = at(&run.simplified.poses[run.simplified.template], full.template);
+    let held_out = evaluated
+        .iter()
+        .map(|&pose| at(run.deformed.held_out[pose].as_ref().expect("evaluated poses are held out"), pose))
+        .collect();
+    (rest, held_out)
+}
+
 /// Both ground truths `(simplified, full)` for one deformed pose, with their seeds;
 /// also the per-vertex squared distances to the simplified surface.
 fn pose_errors(
@@ -371,5 +417,29 @@ mod tests {
         assert_eq!(e.v2v, desal_measures::v2v(&a, &b));
         assert_eq!(mean(&per_vertex), e.v2f_deformed_to_target);
         assert!(e.v2f_deformed_to_target <= e.v2v);
+    }
+}
+
+#[cfg(test)]
+mod spike_tests {
+    use super::*;
+
+    /// A face turned inside out against the surface it approximates is a spike; a face
+    /// that follows it, or has no area, is not.
+    #[test]
+    fn a_face_turned_against_the_full_surface_is_counted() {
+        let full = TriMesh {
+            positions: vec![
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+            ],
+            faces: vec![[0, 1, 2], [0, 2, 3]],
+        };
+        let surface = SurfaceIndex::new(&full);
+        let positions = full.positions.clone();
+        assert_eq!(spike_count(&positions, &full.faces, &full, &surface), 0);
+        assert_eq!(spike_count(&positions, &[[0, 2, 1], [0, 2, 3], [0, 0, 1]], &full, &surface), 1);
     }
 }

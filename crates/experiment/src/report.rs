@@ -143,6 +143,9 @@ pub struct MethodReport {
     /// v2f of the simplified template (as stage 3 left it) against the full template:
     /// the plain simplification's surface error (absent with `--skip surface`).
     pub surface_v2f: Option<f64>,
+    /// Simplified faces more than 90° from the full surface's nearest normal in the rest
+    /// pose (`crate::measure::spike_count`; absent with `--skip spikes`).
+    pub spikes_rest: Option<usize>,
     /// Against the baseline (absent for the baseline itself or when it was not run).
     pub versus_baseline: Option<Versus>,
     pub poses: Vec<PoseRecord>,
@@ -219,6 +222,8 @@ pub struct PoseRecord {
     pub in_sample: PoseErrors,
     pub held_out: PoseErrors,
     pub upsampling: Option<PoseUpsamplers>,
+    /// Spikes of the held-out deformation (`crate::measure::spike_count`).
+    pub spikes: Option<usize>,
 }
 
 /// Wall times, seconds.
@@ -378,7 +383,9 @@ fn every_measure_table(md: &mut String, report: &EvalReport) {
          upsamplers that did not see it): the deformation model of this eval and every other one, v2f and v2v \
          against the full-resolution pose; the simplified ground truth upsampled back to full resolution (mean \
          squared vertex error; fitted U and COMA's barycentric U, built on the training poses); and the \
-         simplified template's own v2f against the full one. The `{base}` row gives the figure (m²); every other \
+         simplified template's own v2f against the full one; and the spikes: simplified faces of the held-out \
+         deformation whose normal turns more than 90° from the full surface's nearest one (mean count per \
+         pose; the rest pose's count is in `eval.json`). The `{base}` row gives the figure (m²); every other \
          row its change against it, then the poses on which it is lower and the two-sided sign test's p. \
          **Bold**: the lowest of the column. A method that wins only the measure it optimises loses elsewhere: \
          read the whole row.\n",
@@ -396,6 +403,7 @@ fn every_measure_table(md: &mut String, report: &EvalReport) {
             let text = match c.cells[k] {
                 None => "—".to_owned(),
                 Some(cell) => match cell.percent {
+                    None if c.key == "spikes" => format!("{:.1}", cell.mean),
                     None => sci(cell.mean),
                     Some(pct) => match (cell.wins, cell.p) {
                         (Some(w), Some(p)) => {
@@ -746,6 +754,7 @@ mod tests {
             in_sample: both,
             held_out: both,
             upsampling: None,
+            spikes: None,
         }
     }
 
