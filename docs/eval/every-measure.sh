@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # Issue 43: every method under every measure, held out — the opening table of eval.md —
-# on the bundled sample, the rig sample and (when it is beside the checkout) SCAPE, with
+# on the bundled sample, the rig sample, the avatar sample and (when it is beside the
+# checkout) SCAPE, with
 # the method each `[simplify] objective` picks there. EVAL.md, "Every method under every
 # measure", quotes these runs.
 #
 #   bash docs/eval/every-measure.sh        # writes out/every-measure/<dataset>/eval/eval.md
+#
+# Every dataset's eval.md also has the spikes (issue 42, item 7) of every method.
 #
 # gltfpack joins the rig sample's run when $DESAL_GLTFPACK or `gltfpack` is found (npm
 # `gltfpack`, pinned in tests/gltf: `cd tests/gltf && npm ci`).
@@ -22,6 +25,7 @@ if [ -x "$gltfpack" ]; then
   export DESAL_GLTFPACK="$gltfpack"
 fi
 "$desal" eval pipelines/rig-sample.toml --methods "$rig_methods" --out "$out" --pick --quiet
+"$desal" eval pipelines/avatar-sample.toml --methods "$rig_methods" --out "$out" --pick --quiet
 if [ -d ../shared/datasets/scape ]; then
   "$desal" eval pipelines/scape.toml --methods "$methods" --out "$out" --pick --quiet
 fi
