@@ -16,65 +16,17 @@
 //! - spikes (issue 42, item 7): faces of the held-out deformation more than 90° from the
 //!   full surface's nearest normal, per pose.
 
-use serde::Serialize;
-
 pub use desal_driver::stages::simplify::Objective;
 
-use crate::report::{MethodReport, sign_test};
+use std::fmt::Write as _;
+
+use crate::report::{Cell, Column, EvalReport, MethodReport, p_value, percent, sci, sign_test};
 
 /// The models measured beside `--model`, unless skipped (`--skip`) or `--model` itself.
 pub const OTHER_MODELS: [&str; 2] = ["scape", "lbs"];
 
 /// What `--skip` may name: the other models, `upsampling`, `surface`.
 pub const SKIPPABLE: [&str; 5] = ["scape", "lbs", "upsampling", "surface", "spikes"];
-
-/// A second model's held-out errors against the full-resolution pose, for one method.
-#[derive(Debug, Clone, Serialize)]
-pub struct OtherModel {
-    pub model: String,
-    /// Per evaluated pose (`None` when the model could not be fitted on this method's
-    /// simplified set; `error` says why).
-    pub poses: Vec<crate::measure::Errors>,
-    pub error: Option<String>,
-}
-
-/// One measure's figure for one method.
-#[derive(Debug, Clone, Copy, Serialize)]
-pub struct Cell {
-    /// Mean over the evaluated poses (or the single figure).
-    pub mean: f64,
-    /// Relative change of the mean against the baseline, percent (absent for the
-    /// baseline row or when the baseline was not run).
-    pub percent: Option<f64>,
-    /// Poses with a lower error than the baseline's, of `poses`, and the sign test's p
-    /// (absent for a single figure).
-    pub wins: Option<usize>,
-    pub poses: usize,
-    pub p: Option<f64>,
-}
-
-/// One column of the opening table.
-#[derive(Debug, Clone, Serialize)]
-pub struct Column {
-    /// Stable key, e.g. `scape.v2f`, `lbs.v2v`, `upsampling.fitted`, `surface`.
-    pub key: String,
-    pub title: String,
-    /// Per method, in `methods` order (`None`: not measured for that method).
-    pub cells: Vec<Option<Cell>>,
-}
-
-impl Column {
-    /// The index of the method with the lowest mean, if any was measured.
-    pub fn best(&self) -> Option<usize> {
-        self.cells
-            .iter()
-            .enumerate()
-            .filter_map(|(k, c)| c.map(|c| (k, c.mean)))
-            .filter(|(_, m)| m.is_finite())
-            .min_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(k, _)| k)
-    }
-}
 
 /// Per-pose values of one measure for every method, or `None` where not measured.
 type PerPose = Vec<Option<Vec<f64>>>;
@@ -220,6 +172,94 @@ pub fn picks(columns: &[Column], model: &str, names: &[String]) -> Vec<(Objectiv
             Some((objective, names[k].clone(), s))
         })
         .collect()
+}
+
+/// The opening table (issue 43): every method under every measure, held out.
+pub fn markdown(report: &EvalReport) -> String {
+    let mut md = String::new();
+    let md = &mut md;
+    let _ = writeln!(md, "## Every method under every measure (held out)\n");
+    let base = report.baseline.as_deref().unwrap_or("(baseline not run)");
+    let _ = writeln!(
+        md,
+        "Each column is one use's measure, held out over the {} folds (a pose is measured by models and \
+         upsamplers that did not see it): the deformation model of this eval and every other one, v2f and v2v \
+         against the full-resolution pose; the simplified ground truth upsampled back to full resolution (mean \
+         squared vertex error; fitted U and COMA's barycentric U, built on the training poses); and the \
+         simplified template's own v2f against the full one; and the spikes: simplified faces of the held-out \
+         deformation whose normal turns more than 90° from the full surface's nearest one (mean count per \
+         pose; the rest pose's count is in `eval.json`). The `{base}` row gives the figure (m²); every other \
+         row its change against it, then the poses on which it is lower and the two-sided sign test's p. \
+         **Bold**: the lowest of the column. A method that wins only the measure it optimises loses elsewhere: \
+         read the whole row.\n",
+        report.folds.len()
+    );
+    let mut header = String::from("| method |");
+    for c in &report.measures {
+        let _ = write!(header, " {} |", c.title);
+    }
+    let _ = writeln!(md, "{header}\n|---|{}", "---|".repeat(report.measures.len()));
+    let best: Vec<Option<usize>> = report.measures.iter().map(|c| c.best()).collect();
+    for (k, m) in report.methods.iter().enumerate() {
+        let mut row = format!("| {} |", m.name);
+        for (c, best) in report.measures.iter().zip(&best) {
+            let text = match c.cells[k] {
+                None => "—".to_owned(),
+                Some(cell) => match cell.percent {
+                    None if c.key == "spikes" => format!("{:.1}", cell.mean),
+                    None => sci(cell.mean),
+                    Some(pct) => match (cell.wins, cell.p) {
+                        (Some(w), Some(p)) => {
+                            format!("{} ({w}/{}, p {})", percent(pct), cell.poses, p_value(p))
+                        }
+                        _ => percent(pct),
+                    },
+                },
+            };
+            if *best == Some(k) {
+                let _ = write!(row, " **{text}** |");
+            } else {
+                let _ = write!(row, " {text} |");
+            }
+        }
+        let _ = writeln!(md, "{row}");
+    }
+    let _ = writeln!(md);
+    for m in &report.methods {
+        for o in m.other_models.iter().filter(|o| o.error.is_some()) {
+            let _ = writeln!(
+                md,
+                "- `{}` under `{}`: not measured ({}).",
+                m.name,
+                o.model,
+                o.error.as_deref().unwrap_or_default()
+            );
+        }
+    }
+    if !report.skipped.is_empty() {
+        let _ = writeln!(md, "- Skipped by `--skip`: {}.", report.skipped.join(", "));
+    }
+    if !report.picks.is_empty() {
+        let _ = writeln!(
+            md,
+            "\n**Which method for which use**, from this table (`[simplify] objective`; the score is the \
+             geometric mean of the use's columns over each column's lowest, 1 = the best in all of them):\n"
+        );
+        let _ = writeln!(md, "| objective | measure | pick | score |\n|---|---|---|---|");
+        for p in &report.picks {
+            let objective: Objective = p.objective.parse().expect("an objective's own name");
+            let _ = writeln!(
+                md,
+                "| `{}` | {} | `{}` | {:.3} |",
+                p.objective,
+                objective_keys(objective, &report.model).join(" and "),
+                p.method,
+                p.score
+            );
+        }
+    }
+    let _ = writeln!(md);
+    md.clone()
 }
 
 #[cfg(test)]

@@ -234,7 +234,7 @@ struct MethodRun {
     /// Per evaluated pose: the upsampling errors ([`upsampling`]); `None` when skipped.
     upsampling: Option<Vec<upsampling::PoseUpsamplers>>,
     /// The other models' held-out errors ([`every_measure`]).
-    other_models: Vec<every_measure::OtherModel>,
+    other_models: Vec<report::OtherModel>,
     /// The simplified template's v2f against the full one; `None` when skipped.
     surface_v2f: Option<f64>,
     /// [`measure::spikes`]: in the rest pose, then per evaluated pose; `None` when skipped.
@@ -338,7 +338,7 @@ fn evaluate_dataset(
                 Err(e) => (Vec::new(), Some(format!("{e:#}"))),
             };
             log(&format!("{}: under {name} ({:.2} s)", method.name(), started.elapsed().as_secs_f64()));
-            others.push(every_measure::OtherModel { model: name.clone(), poses: poses_errors, error });
+            others.push(report::OtherModel { model: name.clone(), poses: poses_errors, error });
         }
         let surface_v2f =
             (!skipped("surface")).then(|| desal_measures::metrics::v2f(&set.raw, &full_template));
@@ -445,7 +445,7 @@ fn evaluate_dataset(
         }
         report.total_seconds = started.elapsed().as_secs_f64();
         desal_io::write_json(&dir.join("eval.json"), &report)?;
-        let md = report::markdown(&report, &files) + &sweep_md;
+        let md = report::markdown(&report, &files, &every_measure::markdown(&report)) + &sweep_md;
         desal_io::write_atomic(&dir.join("eval.md"), md.as_bytes())?;
         Ok(())
     })?;

@@ -6,7 +6,6 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use crate::every_measure::{Column, OtherModel};
 use crate::measure::{Errors, MeanStd, ModelRun, PoseErrors};
 use crate::regions::RegionStats;
 use crate::upsampling::{PoseUpsamplers, UpsamplingReport};
@@ -53,6 +52,54 @@ pub struct EvalReport {
     /// Wall time of measuring every method's poses, seconds.
     pub measure_seconds: f64,
     pub total_seconds: f64,
+}
+
+/// A second model's held-out errors against the full-resolution pose, for one method.
+#[derive(Debug, Clone, Serialize)]
+pub struct OtherModel {
+    pub model: String,
+    /// Per evaluated pose (`None` when the model could not be fitted on this method's
+    /// simplified set; `error` says why).
+    pub poses: Vec<Errors>,
+    pub error: Option<String>,
+}
+
+/// One measure's figure for one method.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct Cell {
+    /// Mean over the evaluated poses (or the single figure).
+    pub mean: f64,
+    /// Relative change of the mean against the baseline, percent (absent for the
+    /// baseline row or when the baseline was not run).
+    pub percent: Option<f64>,
+    /// Poses with a lower error than the baseline's, of `poses`, and the sign test's p
+    /// (absent for a single figure).
+    pub wins: Option<usize>,
+    pub poses: usize,
+    pub p: Option<f64>,
+}
+
+/// One column of the opening table.
+#[derive(Debug, Clone, Serialize)]
+pub struct Column {
+    /// Stable key, e.g. `scape.v2f`, `lbs.v2v`, `upsampling.fitted`, `surface`.
+    pub key: String,
+    pub title: String,
+    /// Per method, in `methods` order (`None`: not measured for that method).
+    pub cells: Vec<Option<Cell>>,
+}
+
+impl Column {
+    /// The index of the method with the lowest mean, if any was measured.
+    pub fn best(&self) -> Option<usize> {
+        self.cells
+            .iter()
+            .enumerate()
+            .filter_map(|(k, c)| c.map(|c| (k, c.mean)))
+            .filter(|(_, m)| m.is_finite())
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(k, _)| k)
+    }
 }
 
 /// The method a use would pick from this run.
@@ -313,7 +360,8 @@ fn model_description(model: &str) -> &'static str {
 }
 
 /// `eval.md`.
-pub fn markdown(report: &EvalReport, figures: &[String]) -> String {
+/// `opening` is the opening table ([`crate::every_measure::markdown`]).
+pub fn markdown(report: &EvalReport, figures: &[String], opening: &str) -> String {
     let mut md = String::new();
     let n = report.evaluated_poses.len();
     let template_name = &report.pose_names[report.template];
@@ -348,7 +396,7 @@ pub fn markdown(report: &EvalReport, figures: &[String]) -> String {
         report.folds.len(),
         report.baseline.as_deref().unwrap_or("(baseline not run)"),
     );
-    every_measure_table(&mut md, report);
+    md.push_str(opening);
     for (title, split, full) in [
         ("In-sample, vs simplified ground truth (the paper's Table 1 measure)", false, false),
         ("Held-out, vs simplified ground truth", true, false),
@@ -373,92 +421,6 @@ pub fn markdown(report: &EvalReport, figures: &[String]) -> String {
     md
 }
 
-/// The opening table (issue 43): every method under every measure, held out.
-fn every_measure_table(md: &mut String, report: &EvalReport) {
-    let _ = writeln!(md, "## Every method under every measure (held out)\n");
-    let base = report.baseline.as_deref().unwrap_or("(baseline not run)");
-    let _ = writeln!(
-        md,
-        "Each column is one use's measure, held out over the {} folds (a pose is measured by models and \
-         upsamplers that did not see it): the deformation model of this eval and every other one, v2f and v2v \
-         against the full-resolution pose; the simplified ground truth upsampled back to full resolution (mean \
-         squared vertex error; fitted U and COMA's barycentric U, built on the training poses); and the \
-         simplified template's own v2f against the full one; and the spikes: simplified faces of the held-out \
-         deformation whose normal turns more than 90° from the full surface's nearest one (mean count per \
-         pose; the rest pose's count is in `eval.json`). The `{base}` row gives the figure (m²); every other \
-         row its change against it, then the poses on which it is lower and the two-sided sign test's p. \
-         **Bold**: the lowest of the column. A method that wins only the measure it optimises loses elsewhere: \
-         read the whole row.\n",
-        report.folds.len()
-    );
-    let mut header = String::from("| method |");
-    for c in &report.measures {
-        let _ = write!(header, " {} |", c.title);
-    }
-    let _ = writeln!(md, "{header}\n|---|{}", "---|".repeat(report.measures.len()));
-    let best: Vec<Option<usize>> = report.measures.iter().map(|c| c.best()).collect();
-    for (k, m) in report.methods.iter().enumerate() {
-        let mut row = format!("| {} |", m.name);
-        for (c, best) in report.measures.iter().zip(&best) {
-            let text = match c.cells[k] {
-                None => "—".to_owned(),
-                Some(cell) => match cell.percent {
-                    None if c.key == "spikes" => format!("{:.1}", cell.mean),
-                    None => sci(cell.mean),
-                    Some(pct) => match (cell.wins, cell.p) {
-                        (Some(w), Some(p)) => {
-                            format!("{} ({w}/{}, p {})", percent(pct), cell.poses, p_value(p))
-                        }
-                        _ => percent(pct),
-                    },
-                },
-            };
-            if *best == Some(k) {
-                let _ = write!(row, " **{text}** |");
-            } else {
-                let _ = write!(row, " {text} |");
-            }
-        }
-        let _ = writeln!(md, "{row}");
-    }
-    let _ = writeln!(md);
-    for m in &report.methods {
-        for o in m.other_models.iter().filter(|o| o.error.is_some()) {
-            let _ = writeln!(
-                md,
-                "- `{}` under `{}`: not measured ({}).",
-                m.name,
-                o.model,
-                o.error.as_deref().unwrap_or_default()
-            );
-        }
-    }
-    if !report.skipped.is_empty() {
-        let _ = writeln!(md, "- Skipped by `--skip`: {}.", report.skipped.join(", "));
-    }
-    if !report.picks.is_empty() {
-        let _ = writeln!(
-            md,
-            "\n**Which method for which use**, from this table (`[simplify] objective`; the score is the \
-             geometric mean of the use's columns over each column's lowest, 1 = the best in all of them):\n"
-        );
-        let _ = writeln!(md, "| objective | measure | pick | score |\n|---|---|---|---|");
-        for p in &report.picks {
-            let objective: crate::every_measure::Objective =
-                p.objective.parse().expect("an objective's own name");
-            let _ = writeln!(
-                md,
-                "| `{}` | {} | `{}` | {:.3} |",
-                p.objective,
-                crate::every_measure::objective_keys(objective, &report.model).join(" and "),
-                p.method,
-                p.score
-            );
-        }
-    }
-    let _ = writeln!(md);
-}
-
 fn floor_table(md: &mut String, report: &EvalReport) {
     let Some(f) = &report.floor else { return };
     let _ = writeln!(md, "## The model's own floor (full resolution)\n");
@@ -479,15 +441,15 @@ fn floor_table(md: &mut String, report: &EvalReport) {
     let _ = writeln!(md, "| held out / in-sample | {:.2} | {:.2} |\n", f.v2f_ratio, f.v2v_ratio);
 }
 
-fn sci(x: f64) -> String {
+pub(crate) fn sci(x: f64) -> String {
     if x.is_finite() { format!("{x:.3e}") } else { "—".into() }
 }
 
-fn p_value(p: f64) -> String {
+pub(crate) fn p_value(p: f64) -> String {
     if p < 1e-3 { format!("{p:.0e}") } else { format!("{p:.3}") }
 }
 
-fn percent(x: f64) -> String {
+pub(crate) fn percent(x: f64) -> String {
     if x.is_finite() { format!("{x:+.1} %") } else { "—".into() }
 }
 

@@ -14,59 +14,22 @@
 //! Index spaces: `orig_idx` (level 0, the pose set), `fine_idx` (level k), `coarse_idx`
 //! (level k+1).
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use desal_io::artifact::{ArtifactKind, ContentHash, MapV1};
 use desal_mesh::{PartLabels, PoseSet, Progress};
 use desal_simplify::Placement;
-use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use crate::cache::{StageKey, canonical_json};
 use crate::stages::chain::{ChainInput, ChainSettings, chain};
 use crate::stages::meshes::MeshPlan;
+pub use crate::stages::rig::{LodSummary, check_fractions};
 use crate::stages::runner::{Memory, Stage, StageOutput, Staged, Store};
 use crate::stages::seams::{SeamEdges, nested_seam_edges};
 use crate::stages::simplify::SimplifyParams;
 
 /// Version of the LOD level stage (with stage 3's own).
 pub const LOD_STAGE_VERSION: u32 = 1;
-
-/// Checks `lods`: at least one level, each in (0, 1], strictly decreasing.
-pub fn check_fractions(lods: &[f64]) -> Result<()> {
-    if lods.is_empty() {
-        bail!("rig.lods is empty: give the levels' fractions of the original faces, e.g. [0.5, 0.25, 0.1]");
-    }
-    if let Some((k, f)) = lods.iter().enumerate().find(|&(_, &f)| !(f > 0.0 && f <= 1.0)) {
-        bail!("rig.lods[{k}] = {f} is not a fraction of the original faces in (0, 1]");
-    }
-    if let Some(k) = (1..lods.len()).find(|&k| lods[k] >= lods[k - 1]) {
-        bail!(
-            "rig.lods must be strictly decreasing (each level simplified from the one before): lods[{k}] = {} \
-             follows {}",
-            lods[k],
-            lods[k - 1]
-        );
-    }
-    Ok(())
-}
-
-/// One level's figures (`simplified-rig.json`'s `lods`, with the written file's).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct LodSummary {
-    /// 1 for the first level below the input.
-    pub level: usize,
-    /// The level's `lods` entry: its target as a fraction of the original faces.
-    pub fraction: f64,
-    pub target_faces: usize,
-    /// Welded vertices and faces of the level (the simplified pose set's).
-    pub vertices: usize,
-    pub faces: usize,
-    /// Stage 3's stop reason on this level (`target` or `no valid collapse`).
-    pub stop: String,
-    /// Stage 3's largest collapse error on this level (mesh units).
-    pub max_error: f64,
-    pub seconds: f64,
-}
 
 /// What the levels are simplified with: the dataset's stages 1–3 and the fractions.
 #[derive(Debug, Clone, Copy)]

@@ -200,7 +200,7 @@ impl RigParams {
     pub fn lod_fractions(&self) -> Result<&[f64]> {
         match &self.lods {
             Some(lods) => {
-                crate::stages::lods::check_fractions(lods)?;
+                check_fractions(lods)?;
                 Ok(lods)
             }
             None => Ok(&[]),
@@ -446,7 +446,7 @@ pub struct LodGlbs {
 #[derive(Debug, Clone, Serialize)]
 pub struct LodFigures {
     #[serde(flatten)]
-    pub level: crate::stages::lods::LodSummary,
+    pub level: LodSummary,
     /// `simplified-lod<k>.glb` (`.vrm` for a `.vrm`).
     pub file: String,
     /// Vertices and faces of the written primitives (seam copies included).
@@ -482,10 +482,7 @@ pub fn lod_file_name(source: &RigSource, level: Option<usize>) -> String {
 /// The rigs of a LOD chain (`levels`: each level's map into the pose set, finest
 /// first, with its summary): one edited document per level and the chain in one, each
 /// level's weights exact (subset placement) and capped at `max_influences`.
-pub fn lod_glbs(
-    source: &RigSource,
-    levels: &[(&MapV1, &crate::stages::lods::LodSummary)],
-) -> Result<LodGlbs> {
+pub fn lod_glbs(source: &RigSource, levels: &[(&MapV1, &LodSummary)]) -> Result<LodGlbs> {
     let input = RigInput { file: &source.file, params: &source.params };
     let options = source.params.weight_options()?;
     let (rig, document, posed) = input.load_with_document()?;
@@ -666,6 +663,46 @@ pub fn simplified_rig(
     };
     let targets = desal_rig::PoseTargets { joints: &posed.joints, positions: &posed.poses.poses };
     Ok(desal_rig::simplified_rig_with(rig, &posed.weld, &input, &targets, options)?)
+}
+
+// The LOD chain's settings check and figures, here (not in `lods.rs`) so that the rig
+// stage, which checks and writes them, does not depend on the stage that makes them.
+
+/// Checks `lods`: at least one level, each in (0, 1], strictly decreasing.
+pub fn check_fractions(lods: &[f64]) -> Result<()> {
+    if lods.is_empty() {
+        bail!("rig.lods is empty: give the levels' fractions of the original faces, e.g. [0.5, 0.25, 0.1]");
+    }
+    if let Some((k, f)) = lods.iter().enumerate().find(|&(_, &f)| !(f > 0.0 && f <= 1.0)) {
+        bail!("rig.lods[{k}] = {f} is not a fraction of the original faces in (0, 1]");
+    }
+    if let Some(k) = (1..lods.len()).find(|&k| lods[k] >= lods[k - 1]) {
+        bail!(
+            "rig.lods must be strictly decreasing (each level simplified from the one before): lods[{k}] = {} \
+             follows {}",
+            lods[k],
+            lods[k - 1]
+        );
+    }
+    Ok(())
+}
+
+/// One level's figures (`simplified-rig.json`'s `lods`, with the written file's).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LodSummary {
+    /// 1 for the first level below the input.
+    pub level: usize,
+    /// The level's `lods` entry: its target as a fraction of the original faces.
+    pub fraction: f64,
+    pub target_faces: usize,
+    /// Welded vertices and faces of the level (the simplified pose set's).
+    pub vertices: usize,
+    pub faces: usize,
+    /// Stage 3's stop reason on this level (`target` or `no valid collapse`).
+    pub stop: String,
+    /// Stage 3's largest collapse error on this level (mesh units).
+    pub max_error: f64,
+    pub seconds: f64,
 }
 
 #[cfg(test)]

@@ -814,7 +814,7 @@ pub fn desal_upsample(
     seen: &[usize],
 ) -> Result<StageOutput<SimplifiedV1, SimplifySummary>> {
     let started = std::time::Instant::now();
-    let upsampler = super::hierarchy::measured_fitted(None)?;
+    let upsampler = desal_hierarchy::Upsampler::default();
     let weighted = desal_refit::upsampler::ForUpsampler { poses: set, labels, seen, upsampler: &upsampler }
         .simplify(config)?;
     let mut out = output(&weighted.config, Method::DesalUpsample.name(), &weighted.simplified);
