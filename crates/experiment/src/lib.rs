@@ -298,6 +298,8 @@ fn evaluate_dataset(
         .map(|&name| Ok((name.to_owned(), model::resolve(Some(name), stages.rig.is_some())?.1)))
         .collect::<Result<_>>()?;
     let full_template = poses.template_mesh();
+    // A rig of several meshes: spikes are judged mesh by mesh.
+    let meshes = inputs.rig.as_ref().and_then(rig::RigModel::mesh_split);
     let mut prepared = Vec::new();
     for method in methods {
         let set = methods::simplify_and_map(method, &inputs, target)?;
@@ -344,7 +346,14 @@ fn evaluate_dataset(
             (!skipped("surface")).then(|| desal_measures::metrics::v2f(&set.raw, &full_template));
         let spikes = (!skipped("spikes")).then(|| {
             let run = measure::Run { simplified: &set.mapped.poses, deformed: &deformed };
-            measure::spikes(poses, &evaluated, &run, &full_surfaces)
+            measure::spikes(
+                poses,
+                &evaluated,
+                &run,
+                &set.mapped.map.simp_to_orig,
+                &full_surfaces,
+                meshes.as_ref(),
+            )
         });
         prepared.push((method.clone(), set, deformed, up, (others, surface_v2f, spikes)));
     }

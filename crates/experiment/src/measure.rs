@@ -307,35 +307,108 @@ pub fn held_out_vs_full(
 }
 
 /// Issue 42, item 7: the simplified faces of `positions` (with `faces`) whose normal turns
-/// more than 90° from the normal of the full surface's face nearest to their centroid
-/// (`full` posed as `surface` indexes it): spikes and folds a viewer shows as dark or
-/// inside-out triangles. Faces of zero area are not counted.
-pub fn spike_count(positions: &[Vec3], faces: &[Face], full: &TriMesh, surface: &SurfaceIndex) -> usize {
+/// more than 90° from the normal of the full surface's face nearest to their centroid:
+/// spikes and folds a viewer shows as dark or inside-out triangles. Faces of zero area
+/// are not counted. `surfaces` is the full pose as [`SpikeSurfaces`] splits it; a face of
+/// mesh `face_mesh[f]` is judged against that mesh's full surface (all in mesh 0 when
+/// `face_mesh` is empty).
+fn spike_count(positions: &[Vec3], faces: &[Face], face_mesh: &[u32], surfaces: &SpikeSurfaces) -> usize {
     faces
         .par_iter()
-        .filter(|&&[a, b, c]| {
+        .enumerate()
+        .filter(|&(f, &[a, b, c])| {
             let [a, b, c] = [a, b, c].map(|v| positions[v as usize]);
             let normal = (b - a).cross(&(c - a));
             if normal.norm_squared() == 0.0 {
                 return false;
             }
-            let centroid = (a + b + c) / 3.0;
-            surface.nearest(&centroid).is_some_and(|(f, _)| normal.dot(&full.face_normal(f as usize)) < 0.0)
+            let mesh = face_mesh.get(f).copied().unwrap_or(0) as usize;
+            surfaces.nearest_normal(mesh, &((a + b + c) / 3.0)).is_some_and(|n| normal.dot(&n) < 0.0)
         })
         .count()
 }
 
+/// Which glTF mesh each full (welded) vertex belongs to, for a rig of several meshes: a
+/// simplified face is judged against its own mesh's full surface, so an eyelid is
+/// compared with the full eyelids and not with the eyeball behind them (whose faces turn
+/// the other way wherever the two meshes touch or cross, as they do at full resolution).
+#[derive(Debug, Clone)]
+pub struct MeshSplit {
+    /// Per full vertex, its mesh.
+    pub of_vertex: Vec<u32>,
+    pub mesh_count: usize,
+}
+
+impl MeshSplit {
+    /// The mesh of each face of `faces` over full vertices: the mesh most of its corners
+    /// are in (the first corner's when all three differ).
+    pub fn face_meshes(&self, faces: &[Face], to_full: impl Fn(u32) -> u32) -> Vec<u32> {
+        faces
+            .iter()
+            .map(|&[a, b, c]| {
+                let [a, b, c] = [a, b, c].map(|v| self.of_vertex[to_full(v) as usize]);
+                if b == c { b } else { a }
+            })
+            .collect()
+    }
+}
+
+/// One full pose's surface for [`spike_count`]: whole, or one index per mesh of a
+/// [`MeshSplit`], each with its faces' unit normals.
+enum SpikeSurfaces<'a> {
+    Whole { mesh: TriMesh, surface: &'a SurfaceIndex },
+    PerMesh(Vec<(SurfaceIndex, Vec<Vec3>)>),
+}
+
+impl<'a> SpikeSurfaces<'a> {
+    /// `full`'s pose `pose`, indexed whole by `surface` or split by `meshes`.
+    fn new(full: &PoseSet, pose: usize, surface: &'a SurfaceIndex, meshes: Option<&MeshSplit>) -> Self {
+        let mesh = full.pose_mesh(pose);
+        let Some(split) = meshes else {
+            return Self::Whole { mesh, surface };
+        };
+        let face_mesh = split.face_meshes(&mesh.faces, |v| v);
+        let parts = (0..split.mesh_count as u32)
+            .into_par_iter()
+            .map(|m| {
+                let faces: Vec<Face> =
+                    mesh.faces.iter().zip(&face_mesh).filter(|&(_, &of)| of == m).map(|(f, _)| *f).collect();
+                let part = TriMesh { positions: mesh.positions.clone(), faces };
+                let normals = (0..part.face_count()).map(|f| part.face_normal(f)).collect();
+                (SurfaceIndex::new(&part), normals)
+            })
+            .collect();
+        Self::PerMesh(parts)
+    }
+
+    /// The unit normal of the face of mesh `mesh` nearest to `p` (any face when whole).
+    fn nearest_normal(&self, mesh: usize, p: &Vec3) -> Option<Vec3> {
+        match self {
+            Self::Whole { mesh, surface } => surface.nearest(p).map(|(f, _)| mesh.face_normal(f as usize)),
+            Self::PerMesh(parts) => {
+                let (surface, normals) = parts.get(mesh)?;
+                surface.nearest(p).map(|(f, _)| normals[f as usize])
+            }
+        }
+    }
+}
+
 /// [`spike_count`] of a run: in the rest pose (the simplified template against the full
 /// one), then per pose of `evaluated`, its held-out deformation against the full pose.
+/// `simp_to_full` maps the run's vertices to full ones (stage 4's map), for `meshes`.
 pub fn spikes(
     full: &PoseSet,
     evaluated: &[usize],
     run: &Run,
+    simp_to_full: &[u32],
     full_surfaces: &[SurfaceIndex],
+    meshes: Option<&MeshSplit>,
 ) -> (usize, Vec<usize>) {
     let faces = &run.simplified.faces;
+    let face_mesh = meshes.map_or_else(Vec::new, |m| m.face_meshes(faces, |v| simp_to_full[v as usize]));
     let at = |positions: &[Vec3], pose: usize| {
-        spike_count(positions, faces, &full.pose_mesh(pose), &full_surfaces[pose])
+        let surfaces = SpikeSurfaces::new(full, pose, &full_surfaces[pose], meshes);
+        spike_count(positions, faces, &face_mesh, &surfaces)
     };
     let rest = at(&run.simplified.poses[run.simplified.template], full.template);
     let held_out = evaluated
@@ -439,7 +512,45 @@ mod spike_tests {
         };
         let surface = SurfaceIndex::new(&full);
         let positions = full.positions.clone();
-        assert_eq!(spike_count(&positions, &full.faces, &full, &surface), 0);
-        assert_eq!(spike_count(&positions, &[[0, 2, 1], [0, 2, 3], [0, 0, 1]], &full, &surface), 1);
+        let whole = SpikeSurfaces::Whole { mesh: full.clone(), surface: &surface };
+        assert_eq!(spike_count(&positions, &full.faces, &[], &whole), 0);
+        assert_eq!(spike_count(&positions, &[[0, 2, 1], [0, 2, 3], [0, 0, 1]], &[], &whole), 1);
+    }
+
+    /// Two meshes face to face 1 cm apart (an eyelid over an eyeball): a face of the upper
+    /// one pushed 6 mm down lies nearer the lower one, whose normal turns the other way.
+    /// Judged whole it is a spike; judged against its own mesh, as a rig of several meshes
+    /// is, it is not, while a face of it turned over still is.
+    #[test]
+    fn a_face_is_judged_against_its_own_mesh() {
+        let v = |x: f64, y: f64, z: f64| Vec3::new(x, y, z);
+        let positions = vec![
+            // Mesh 0, facing up at z = 0.01.
+            v(0.0, 0.0, 0.01),
+            v(1.0, 0.0, 0.01),
+            v(0.0, 1.0, 0.01),
+            // Mesh 1, facing down at z = 0.
+            v(0.0, 0.0, 0.0),
+            v(0.0, 1.0, 0.0),
+            v(1.0, 0.0, 0.0),
+        ];
+        let full =
+            PoseSet::try_new(vec!["rest".into()], vec![positions.clone()], vec![[0, 1, 2], [3, 4, 5]], 0)
+                .expect("a valid pose set");
+        let split = MeshSplit { of_vertex: vec![0, 0, 0, 1, 1, 1], mesh_count: 2 };
+        let surface = SurfaceIndex::new(&full.pose_mesh(0));
+        let mut moved = positions.clone();
+        for p in &mut moved[..3] {
+            p.z = 0.004;
+        }
+        let faces = [[0, 1, 2]];
+        let count = |positions: &[Vec3], faces: &[Face], meshes: Option<&MeshSplit>| {
+            let face_mesh = meshes.map_or_else(Vec::new, |m| m.face_meshes(faces, |v| v));
+            spike_count(positions, faces, &face_mesh, &SpikeSurfaces::new(&full, 0, &surface, meshes))
+        };
+        assert_eq!(count(&moved, &faces, None), 1, "judged whole, the lower mesh is nearer");
+        assert_eq!(count(&moved, &faces, Some(&split)), 0, "judged against its own mesh");
+        assert_eq!(count(&moved, &[[0, 2, 1]], Some(&split)), 1, "turned over, it is a spike");
+        assert_eq!(split.face_meshes(&[[0, 3, 4], [3, 0, 1], [0, 3, 5]], |v| v), [1, 0, 1]);
     }
 }

@@ -26,7 +26,7 @@ use desal_mesh::{PoseSet, Vec3};
 use desal_rig::{Influences, PosedRig, Rig, SimplifiedInput, WeightOptions};
 use rayon::prelude::*;
 
-use crate::measure::{Deformed, ModelRun};
+use crate::measure::{Deformed, MeshSplit, ModelRun};
 use desal_driver::stages::rig::{RigInput, RigSource};
 
 /// A rig dataset's input rig, posed at the pose set's frames.
@@ -182,6 +182,23 @@ impl RigModel {
             synthesis_seconds,
         };
         Ok((run, skinned))
+    }
+
+    /// The glTF mesh of each welded vertex, when the rig has more than one
+    /// ([`crate::measure::MeshSplit`]); welding never joins vertices of two meshes.
+    pub fn mesh_split(&self) -> Option<MeshSplit> {
+        let meshes = &self.rig.meshes;
+        if meshes.len() < 2 {
+            return None;
+        }
+        let weld = &self.posed.weld;
+        let of_vertex = (0..weld.welded_count())
+            .map(|w| {
+                let split = weld.copies[weld.copy_offsets[w] as usize];
+                meshes.iter().position(|m| m.vertices.contains(&split)).unwrap_or(0) as u32
+            })
+            .collect();
+        Some(MeshSplit { of_vertex, mesh_count: meshes.len() })
     }
 
     /// The input's skinning matrices re-expressed for another file's skin of the same
