@@ -26,7 +26,7 @@ use crate::report::{Cell, Column, EvalReport, MethodReport, p_value, percent, sc
 pub const OTHER_MODELS: [&str; 2] = ["scape", "lbs"];
 
 /// What `--skip` may name: the other models, `upsampling`, `surface`.
-pub const SKIPPABLE: [&str; 5] = ["scape", "lbs", "upsampling", "surface", "spikes"];
+pub const SKIPPABLE: [&str; 6] = ["scape", "lbs", "upsampling", "surface", "spikes", "lods"];
 
 /// Per-pose values of one measure for every method, or `None` where not measured.
 type PerPose = Vec<Option<Vec<f64>>>;

@@ -19,8 +19,8 @@ use std::path::Path;
 use std::process::Command;
 
 use anyhow::{Context, Result, bail};
-use desal_mesh::{TriMesh, Vec3};
-use desal_rig::{Influences, ReadOptions, Rig, Weld};
+use desal_mesh::TriMesh;
+use desal_rig::{ReadOptions, Rig, SourceDocument, Weld};
 
 use crate::rig::{OwnSkin, RigModel};
 
@@ -46,7 +46,8 @@ impl Variant {
         }
     }
 
-    fn flags(self) -> &'static [&'static str] {
+    /// The flags besides `-i`, `-o` and `-si`.
+    pub fn flags(self) -> &'static [&'static str] {
         match self {
             Variant::Plain => &["-noq"],
             Variant::Aggressive => &["-noq", "-sa"],
@@ -91,8 +92,9 @@ pub fn version() -> Result<String> {
     Ok(text.lines().next().unwrap_or("gltfpack (unknown version)").trim().to_owned())
 }
 
-/// Runs gltfpack on the model's file at `ratio` into `out`, and reads the result.
-fn simplify_at(model: &RigModel, variant: Variant, ratio: f64, out: &Path) -> Result<Rig> {
+/// Runs gltfpack on the model's file at `ratio` into `out`, and reads the result with
+/// its document (for its morph targets).
+fn simplify_at(model: &RigModel, variant: Variant, ratio: f64, out: &Path) -> Result<(Rig, SourceDocument)> {
     let input = model.file.to_str().context("the rig's path is not UTF-8")?;
     let output = out.to_str().context("the temporary path is not UTF-8")?;
     let ratio_text = format!("{ratio:.6}");
@@ -107,28 +109,78 @@ fn simplify_at(model: &RigModel, variant: Variant, ratio: f64, out: &Path) -> Re
             String::from_utf8_lossy(&result.stderr).trim()
         );
     }
+    let bytes = desal_io::file::read_regular_file(out)?;
     let options = ReadOptions { mesh: model.mesh.clone() };
-    desal_rig::read_rig(out, &options)
-        .or_else(|_| desal_rig::read_rig(out, &ReadOptions::default()))
+    desal_rig::read_rig_and_document(out, &bytes, &options)
+        .or_else(|_| desal_rig::read_rig_and_document(out, &bytes, &ReadOptions::default()))
         .with_context(|| format!("reading gltfpack's output (-si {ratio_text})"))
 }
 
-/// gltfpack's rig at the welded vertex count closest to `target` from below.
-pub fn simplify(model: &RigModel, variant: Variant, target: usize) -> Result<Output> {
+/// What a bisection of gltfpack's ratio aims at, from below.
+#[derive(Debug, Clone, Copy)]
+pub enum Aim {
+    /// Welded vertices (the eval's `--target-vertices`).
+    Vertices(usize),
+    /// Welded faces (a LOD level's face count).
+    Faces(usize),
+}
+
+impl Aim {
+    fn target(self) -> usize {
+        match self {
+            Aim::Vertices(n) | Aim::Faces(n) => n,
+        }
+    }
+
+    fn count(self, rig: &Rig) -> usize {
+        let weld = Weld::new(&rig.mesh);
+        match self {
+            Aim::Vertices(_) => weld.welded_count(),
+            Aim::Faces(_) => weld.faces.len(),
+        }
+    }
+}
+
+/// gltfpack's output at the ratio whose count is closest to the aim from below (else
+/// the smallest count it reached).
+#[derive(Debug)]
+pub struct Bisected {
+    pub ratio: f64,
+    pub count: usize,
+    pub rig: Rig,
+    pub document: SourceDocument,
+    /// gltfpack runs made.
+    pub runs: usize,
+    /// gltfpack's version line.
+    pub version: String,
+}
+
+impl Bisected {
+    /// The count is at most the aim.
+    pub fn reached(&self, aim: Aim) -> bool {
+        self.count <= aim.target()
+    }
+}
+
+/// Bisects gltfpack's ratio (at most [`MAX_RUNS`] runs) for `aim`.
+pub fn bisect(model: &RigModel, variant: Variant, aim: Aim) -> Result<Bisected> {
     let version = version()?;
     let dir = tempfile::tempdir().context("a temporary folder for gltfpack")?;
-    let welded = model.posed.poses.vertex_count();
-    let count = |rig: &Rig| Weld::new(&rig.mesh).welded_count();
-    // (ratio, welded count, rig) of the best run so far: at most the target and the
-    // most vertices, else the fewest.
-    let mut best: Option<(f64, usize, Rig)> = None;
+    let target = aim.target();
+    let full = match aim {
+        Aim::Vertices(_) => model.posed.poses.vertex_count(),
+        Aim::Faces(_) => model.posed.poses.face_count(),
+    };
+    // (ratio, count, rig) of the best run so far: at most the target and the most, else
+    // the fewest.
+    let mut best: Option<(f64, usize, (Rig, SourceDocument))> = None;
     let (mut low, mut high) = (0.0f64, 1.0f64);
-    let mut ratio = (target as f64 / welded as f64).clamp(1e-4, 1.0);
+    let mut ratio = (target as f64 / full as f64).clamp(1e-4, 1.0);
     let mut runs = 0;
     for run in 0..MAX_RUNS {
         runs = run + 1;
-        let rig = simplify_at(model, variant, ratio, &dir.path().join(format!("run{run}.glb")))?;
-        let n = count(&rig);
+        let out = simplify_at(model, variant, ratio, &dir.path().join(format!("run{run}.glb")))?;
+        let n = aim.count(&out.0);
         let better = match &best {
             None => true,
             Some((_, b, _)) => (n <= target && (*b > target || n > *b)) || (*b > target && n < *b),
@@ -139,32 +191,26 @@ pub fn simplify(model: &RigModel, variant: Variant, target: usize) -> Result<Out
             high = ratio;
         }
         if better {
-            best = Some((ratio, n, rig));
+            best = Some((ratio, n, out));
         }
         if n == target || high - low < 1e-5 {
             break;
         }
         ratio = 0.5 * (low + high);
     }
-    let (ratio, n, rig) = best.expect("at least one run");
-    let reached = n <= target;
-    let weld = Weld::new(&rig.mesh);
-    let representatives = weld.representatives();
-    let (kept, faces) = desal_mesh::used_vertices(weld.welded_count(), &weld.faces);
-    let positions: Vec<Vec3> = kept
-        .iter()
-        .map(|&w| {
-            let p = rig.mesh.positions[representatives[w as usize] as usize];
-            Vec3::new(p[0].into(), p[1].into(), p[2].into())
-        })
-        .collect();
-    let mut influences = Influences::new();
-    for &w in &kept {
-        let s = representatives[w as usize] as usize;
-        influences.push_row(rig.mesh.influences.of(s).map(|(j, w)| (j as u16, w)));
-    }
-    let joints = model.joints_for(&rig, &format!("gltfpack's output (-si {ratio:.6})"))?;
-    let max_influences = influences.max_influences();
+    let (ratio, count, (rig, document)) = best.expect("at least one run");
+    Ok(Bisected { ratio, count, rig, document, runs, version })
+}
+
+/// gltfpack's rig at the welded vertex count closest to `target` from below.
+pub fn simplify(model: &RigModel, variant: Variant, target: usize) -> Result<Output> {
+    let aim = Aim::Vertices(target);
+    let out = bisect(model, variant, aim)?;
+    let reached = out.reached(aim);
+    let (ratio, runs, version) = (out.ratio, out.runs, &out.version);
+    let welded = model.welded(&out.rig, &format!("gltfpack's output (-si {ratio:.6})"))?;
+    let (positions, faces) = (&welded.mesh.positions, &welded.mesh.faces);
+    let max_influences = welded.skin.max_influences;
     let note = format!(
         "{version} `-si {ratio:.6} {}`: {} welded vertices, {} faces, at most {max_influences} influences (target {target}; {runs} runs bisecting its ratio){}",
         variant.flags().join(" "),
@@ -180,10 +226,5 @@ pub fn simplify(model: &RigModel, variant: Variant, target: usize) -> Result<Out
             )
         }
     );
-    Ok(Output {
-        mesh: TriMesh { positions, faces },
-        skin: OwnSkin { influences, joints, max_influences },
-        note,
-        reached,
-    })
+    Ok(Output { mesh: welded.mesh, skin: welded.skin, note, reached })
 }

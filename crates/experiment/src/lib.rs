@@ -29,6 +29,7 @@ pub mod figures;
 pub mod floor;
 #[cfg(feature = "gltfpack")]
 pub mod gltfpack;
+pub mod lods;
 pub mod measure;
 #[cfg(feature = "meshlab")]
 pub mod meshlab;
@@ -94,9 +95,10 @@ pub struct EvalArgs {
     /// qslim-optimal; gltfpack for a rig dataset that runs it).
     #[cfg_attr(feature = "cli", arg(long))]
     pub baseline: Option<String>,
-    /// Measures to leave out of the opening table, comma-separated: scape and lbs (the
-    /// models measured beside --model), upsampling, surface, spikes. Every measure is on by
-    /// default; eval.md names what was skipped.
+    /// Measures to leave out, comma-separated: scape and lbs (the models measured beside
+    /// --model), upsampling, surface, spikes (of the opening table), lods (a rig's LOD
+    /// levels, `lods::evaluate`). Every measure is on by default; eval.md names what was
+    /// skipped.
     #[cfg_attr(feature = "cli", arg(long, value_delimiter = ','))]
     pub skip: Vec<String>,
     /// Pick a method per use: without --methods, evaluate the candidates of every
@@ -426,6 +428,9 @@ fn evaluate_dataset(
         .collect();
     report.skipped = args.skip.clone();
     report.floor = floor;
+    if !skipped("lods") {
+        report.lods = lods::evaluate(stages, methods, &log).context("the LOD levels")?;
+    }
     report.measure_seconds = measure_seconds;
     let eval_dir = dataset.out_dir.join("eval");
     desal_io::replace_dir(&eval_dir, &[], |dir| -> Result<()> {
@@ -454,7 +459,10 @@ fn evaluate_dataset(
         }
         report.total_seconds = started.elapsed().as_secs_f64();
         desal_io::write_json(&dir.join("eval.json"), &report)?;
-        let md = report::markdown(&report, &files, &every_measure::markdown(&report)) + &sweep_md;
+        let opening = every_measure::markdown(&report);
+        let md = report::markdown(&report, &files, &opening)
+            + &lods::markdown(&report.lods, report.baseline.as_deref().unwrap_or("gltfpack"))
+            + &sweep_md;
         desal_io::write_atomic(&dir.join("eval.md"), md.as_bytes())?;
         Ok(())
     })?;
@@ -566,6 +574,7 @@ fn build_report(
         joint_band_radius: regions.radius,
         model: String::new(),
         floor: None,
+        lods: Vec::new(),
         measure_seconds: 0.0,
         total_seconds: 0.0,
     }

@@ -312,7 +312,12 @@ pub fn held_out_vs_full(
 /// are not counted. `surfaces` is the full pose as [`SpikeSurfaces`] splits it; a face of
 /// mesh `face_mesh[f]` is judged against that mesh's full surface (all in mesh 0 when
 /// `face_mesh` is empty).
-fn spike_count(positions: &[Vec3], faces: &[Face], face_mesh: &[u32], surfaces: &SpikeSurfaces) -> usize {
+pub(crate) fn spike_count(
+    positions: &[Vec3],
+    faces: &[Face],
+    face_mesh: &[u32],
+    surfaces: &SpikeSurfaces,
+) -> usize {
     faces
         .par_iter()
         .enumerate()
@@ -322,7 +327,7 @@ fn spike_count(positions: &[Vec3], faces: &[Face], face_mesh: &[u32], surfaces: 
             if normal.norm_squared() == 0.0 {
                 return false;
             }
-            let mesh = face_mesh.get(f).copied().unwrap_or(0) as usize;
+            let mesh = if face_mesh.is_empty() { 0 } else { face_mesh[f] as usize };
             surfaces.nearest_normal(mesh, &((a + b + c) / 3.0)).is_some_and(|n| normal.dot(&n) < 0.0)
         })
         .count()
@@ -355,7 +360,7 @@ impl MeshSplit {
 
 /// One full pose's surface for [`spike_count`]: whole, or one index per mesh of a
 /// [`MeshSplit`], each with its faces' unit normals.
-enum SpikeSurfaces<'a> {
+pub(crate) enum SpikeSurfaces<'a> {
     Whole { mesh: TriMesh, surface: &'a SurfaceIndex },
     PerMesh(Vec<(SurfaceIndex, Vec<Vec3>)>),
 }
@@ -363,10 +368,15 @@ enum SpikeSurfaces<'a> {
 impl<'a> SpikeSurfaces<'a> {
     /// `full`'s pose `pose`, indexed whole by `surface` or split by `meshes`.
     fn new(full: &PoseSet, pose: usize, surface: &'a SurfaceIndex, meshes: Option<&MeshSplit>) -> Self {
+        match meshes {
+            None => Self::Whole { mesh: full.pose_mesh(pose), surface },
+            Some(split) => Self::per_mesh(full, pose, split),
+        }
+    }
+
+    /// `full`'s pose `pose` split by `split`, one index per mesh.
+    pub(crate) fn per_mesh(full: &PoseSet, pose: usize, split: &MeshSplit) -> Self {
         let mesh = full.pose_mesh(pose);
-        let Some(split) = meshes else {
-            return Self::Whole { mesh, surface };
-        };
         let face_mesh = split.face_meshes(&mesh.faces, |v| v);
         let parts = (0..split.mesh_count as u32)
             .into_par_iter()

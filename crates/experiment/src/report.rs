@@ -49,6 +49,9 @@ pub struct EvalReport {
     pub model: String,
     /// The model's own error at full resolution (`None` with `--no-floor`).
     pub floor: Option<FloorReport>,
+    /// A rig's LOD chain as written, level by level and mesh by mesh, beside the peers
+    /// at the same face counts ([`crate::lods`]; empty without `lods`).
+    pub lods: Vec<crate::lods::LevelReport>,
     /// Wall time of measuring every method's poses, seconds.
     pub measure_seconds: f64,
     pub total_seconds: f64,

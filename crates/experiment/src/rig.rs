@@ -22,12 +22,12 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use desal_mesh::math::Mat4;
-use desal_mesh::{PoseSet, Vec3};
-use desal_rig::{Influences, PosedRig, Rig, SimplifiedInput, WeightOptions};
+use desal_mesh::{PoseSet, TriMesh, Vec3};
+use desal_rig::{Influences, PosedRig, Rig, SimplifiedInput, WeightOptions, Weld};
 use rayon::prelude::*;
 
 use crate::measure::{Deformed, MeshSplit, ModelRun};
-use desal_driver::stages::rig::{RigInput, RigSource};
+use desal_driver::stages::rig::{PosesFrom, RigInput, RigParams, RigSource};
 
 /// A rig dataset's input rig, posed at the pose set's frames.
 #[derive(Debug)]
@@ -50,6 +50,16 @@ pub struct OwnSkin {
     pub joints: Vec<Vec<Mat4>>,
     /// Most influences of any vertex.
     pub max_influences: usize,
+}
+
+/// Another file's rig welded ([`RigModel::welded`]).
+#[derive(Debug, Clone)]
+pub struct WeldedRig {
+    /// Its used welded vertices (bind pose) and faces.
+    pub mesh: TriMesh,
+    pub skin: OwnSkin,
+    /// Per vertex of `mesh`, the split vertex of the file's [`Rig::mesh`] it was taken from.
+    pub sources: Vec<u32>,
 }
 
 /// One simplified set as the rig model skins it.
@@ -83,6 +93,28 @@ impl RigModel {
             options: source.params.weight_options()?,
             mesh: source.params.mesh.clone(),
         })
+    }
+
+    /// The rig of `source` posed at frames no stage saw: random joint turns drawn with the
+    /// dataset's seed + 1, as many frames as it samples per source (`crate::lods`), with
+    /// its morph targets.
+    pub fn held_out(source: &RigSource) -> Result<(Self, Vec<desal_rig::MorphTarget>)> {
+        let params = RigParams {
+            poses: PosesFrom::Random,
+            seed: source.params.seed.wrapping_add(1),
+            ..source.params.clone()
+        };
+        let input = RigInput { file: &source.file, params: &params };
+        let (rig, document, posed) = input.load_with_document()?;
+        let targets = desal_rig::morph_targets(&rig, &document)?;
+        let model = Self {
+            file: source.file.clone(),
+            rig,
+            posed,
+            options: source.params.weight_options()?,
+            mesh: source.params.mesh.clone(),
+        };
+        Ok((model, targets))
     }
 
     /// Skins `set` at every pose: in-sample with weights from all poses, and per fold of
@@ -184,6 +216,35 @@ impl RigModel {
         Ok((run, skinned))
     }
 
+    /// `other` (another file's rig of the same skeleton: gltfpack's output, a LOD level as
+    /// written) welded as [`crate::rig`] skins it: its used welded vertices in the bind
+    /// pose, its faces, its own weights and its joints' matrices at this model's poses.
+    /// `what` names it in errors.
+    pub fn welded(&self, other: &Rig, what: &str) -> Result<WeldedRig> {
+        let weld = Weld::new(&other.mesh);
+        let representatives = weld.representatives();
+        let (kept, faces) = desal_mesh::used_vertices(weld.welded_count(), &weld.faces);
+        let sources: Vec<u32> = kept.iter().map(|&w| representatives[w as usize]).collect();
+        let positions = sources
+            .iter()
+            .map(|&s| {
+                let p = other.mesh.positions[s as usize];
+                Vec3::new(p[0].into(), p[1].into(), p[2].into())
+            })
+            .collect();
+        let mut influences = Influences::new();
+        for &s in &sources {
+            influences.push_row(other.mesh.influences.of(s as usize).map(|(j, w)| (j as u16, w)));
+        }
+        let joints = self.joints_for(other, what)?;
+        let max_influences = influences.max_influences();
+        Ok(WeldedRig {
+            mesh: TriMesh { positions, faces },
+            skin: OwnSkin { influences, joints, max_influences },
+            sources,
+        })
+    }
+
     /// The glTF mesh of each welded vertex, when the rig has more than one
     /// ([`crate::measure::MeshSplit`]); welding never joins vertices of two meshes.
     pub fn mesh_split(&self) -> Option<MeshSplit> {
@@ -195,7 +256,8 @@ impl RigModel {
         let of_vertex = (0..weld.welded_count())
             .map(|w| {
                 let split = weld.copies[weld.copy_offsets[w] as usize];
-                meshes.iter().position(|m| m.vertices.contains(&split)).unwrap_or(0) as u32
+                // The meshes' runs cover the split vertices in order.
+                meshes.partition_point(|m| m.vertices.end <= split) as u32
             })
             .collect();
         Some(MeshSplit { of_vertex, mesh_count: meshes.len() })

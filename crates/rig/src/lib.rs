@@ -31,6 +31,7 @@ mod document;
 pub mod edit;
 pub mod error;
 pub mod model;
+pub mod morph;
 pub mod parts;
 pub mod pose;
 pub mod read;
@@ -51,6 +52,7 @@ pub use model::{
     Animation, Channel, Influences, Interpolation, LocalTransform, Node, PrimitiveSpan, Rig, Skin,
     SkinnedMesh,
 };
+pub use morph::{MorphTarget, morph_targets};
 pub use parts::{PartsConfig, dominant_joint_parts, with_part_tree};
 pub use pose::{
     Frame, FrameConfig, MAX_FRAMES, MAX_POSE_NODES, MAX_POSE_VERTICES, PoseSource, joint_matrices,
