@@ -429,7 +429,7 @@ fn evaluate_dataset(
     report.skipped = args.skip.clone();
     report.floor = floor;
     if !skipped("lods") {
-        report.lods = lods::evaluate(stages, methods, &log).context("the LOD levels")?;
+        report.lods = lods::evaluate(stages, &inputs, methods, &log).context("the LOD levels")?;
     }
     report.measure_seconds = measure_seconds;
     let eval_dir = dataset.out_dir.join("eval");

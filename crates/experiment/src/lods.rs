@@ -5,7 +5,10 @@
 //! (`simplified-lod<k>.glb`: `stages::rig::lod_glbs`, each level simplified from the one
 //! before, its weights capped at `max_influences`), read back as any file; `gltfpack` and
 //! `gltfpack-sa`, when they are among the eval's methods, are bisected to the level's
-//! face count (`gltfpack::bisect`). Each is skinned with its own weights
+//! face count (`gltfpack::bisect`), and meshoptimizer's variants (`meshopt`,
+//! `meshopt-regularize`, `meshopt-priority` with saliency as `Priority`) simplify the input
+//! to that count in one run and are written by desal's own writer, so they differ from
+//! desal's level in the mesh alone (its weights capped alike). Each is skinned with its own weights
 //! ([`RigModel::welded`]) at frames no stage saw — random joint turns drawn with the
 //! dataset's seed + 1 ([`RigModel::held_out`]), as many as the dataset samples — and
 //! measured against the full rig skinned at the same frames:
@@ -28,7 +31,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::measure::{MeshSplit, SpikeSurfaces, spike_count};
-use crate::methods::Method;
+use crate::methods::{Inputs, Method};
 use crate::rig::{RigModel, WeldedRig};
 
 /// One LOD level: every method at its face count.
@@ -101,7 +104,12 @@ struct FullFrame {
 /// Every level of the dataset's `lods`, each method of `methods` that can run on a chain
 /// (desal's own chain always; gltfpack's variants when asked for), measured at held-out
 /// frames. Empty without `lods`.
-pub fn evaluate(stages: &DatasetStages, methods: &[Method], log: &dyn Fn(&str)) -> Result<Vec<LevelReport>> {
+pub fn evaluate(
+    stages: &DatasetStages,
+    inputs: &Inputs,
+    methods: &[Method],
+    log: &dyn Fn(&str),
+) -> Result<Vec<LevelReport>> {
     let Some(source) = stages.rig.as_ref() else { return Ok(Vec::new()) };
     if stages.lods.is_empty() {
         return Ok(Vec::new());
@@ -141,8 +149,22 @@ pub fn evaluate(stages: &DatasetStages, methods: &[Method], log: &dyn Fn(&str)) 
             );
             rows.push(full.measure(&model, variant.name(), note, &out.rig, &out.document)?);
         }
-        #[cfg(not(feature = "gltfpack"))]
-        let _ = methods;
+        #[cfg(feature = "meshopt")]
+        for method in methods {
+            let Method::Meshopt(variant) = method else { continue };
+            let body = crate::meshopt::simplify_to_faces(
+                &inputs.poses.template_mesh(),
+                &inputs.weights,
+                *variant,
+                summary.faces,
+            );
+            let (rig, document) = written_subset(source, &body, summary, &options)
+                .with_context(|| format!("{} at LOD level {}", variant.name(), k + 1))?;
+            let note = "simplified from the input to the level's faces, written by desal's writer".to_owned();
+            rows.push(full.measure(&model, variant.name(), note, &rig, &document)?);
+        }
+        #[cfg(not(all(feature = "gltfpack", feature = "meshopt")))]
+        let _ = (methods, inputs);
         log(&format!("LOD level {}: {} methods measured", k + 1, rows.len()));
         reports.push(LevelReport {
             level: summary.level,
@@ -153,6 +175,36 @@ pub fn evaluate(stages: &DatasetStages, methods: &[Method], log: &dyn Fn(&str)) 
         });
     }
     Ok(reports)
+}
+
+/// A subset simplification (`body`, of the pose set's template) written as desal writes a
+/// level of the chain (`lod_glbs`: the same weights, capped alike) and read back.
+#[cfg(feature = "meshopt")]
+fn written_subset(
+    source: &desal_driver::stages::rig::RigSource,
+    body: &desal_io::artifact::SimplifiedV1,
+    level: &desal_driver::stages::rig::LodSummary,
+    options: &ReadOptions,
+) -> Result<(Rig, SourceDocument)> {
+    let simp_to_orig: Vec<u32> =
+        body.simp_to_orig.iter().map(|o| o.context("not a subset")).collect::<Result<_>>()?;
+    let map = desal_io::artifact::MapV1 {
+        simp_to_orig,
+        faces: body.faces.clone(),
+        mode: "subset".into(),
+        displacement_mean: 0.0,
+        displacement_max: 0.0,
+    };
+    let summary = desal_driver::stages::rig::LodSummary {
+        vertices: map.simp_to_orig.len(),
+        faces: map.faces.len(),
+        stop: body.stop.clone(),
+        ..level.clone()
+    };
+    let written = desal_driver::stages::rig::lod_glbs(source, &[(&map, &summary)])?;
+    let glb = written.levels.first().context("one level written")?;
+    let path = source.file.with_file_name("subset.glb");
+    Ok(desal_rig::read_rig_and_document(&path, &glb.bytes, options)?)
 }
 
 impl FullFrames {

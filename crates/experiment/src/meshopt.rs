@@ -45,39 +45,16 @@ pub fn simplify(
     variant: Variant,
     target_vertices: usize,
 ) -> (SimplifiedV1, usize) {
-    let positions: Vec<[f32; 3]> =
-        template.positions.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect();
-    let indices: Vec<u32> = template.faces.iter().flatten().copied().collect();
-    let mut locks = vec![SimplifyVertex::None; positions.len()];
-    if variant == Variant::Priority {
-        let mut order: Vec<usize> = (0..weights.len()).collect();
-        order.sort_by(|&a, &b| weights[b].total_cmp(&weights[a]).then(a.cmp(&b)));
-        let flagged = (PRIORITY_FRACTION * positions.len() as f64).round() as usize;
-        for &v in order.iter().take(flagged) {
-            locks[v] = SimplifyVertex::Priority;
-        }
-    }
-    let options = match variant {
-        Variant::Regularize => SimplifyOptions::Regularize,
-        _ => SimplifyOptions::None,
-    };
-    let run = |faces: usize| -> Vec<u32> {
-        meshopt::simplify_with_locks_decoder(&indices, &positions, &locks, faces * 3, f32::MAX, options, None)
-    };
-    let vertices_of = |result: &[u32]| {
-        let mut used = vec![false; positions.len()];
-        result.iter().for_each(|&v| used[v as usize] = true);
-        used.iter().filter(|&&u| u).count()
-    };
+    let runner = Runner::new(template, weights, variant);
     // Bisect the face target: the largest whose result keeps <= target_vertices.
     let (mut lo, mut hi) = (1usize, template.face_count());
-    let mut best = run(lo);
+    let mut best = runner.run(lo);
     let mut runs = 1;
     while lo < hi {
         let mid = lo + (hi - lo).div_ceil(2);
-        let result = run(mid);
+        let result = runner.run(mid);
         runs += 1;
-        if vertices_of(&result) <= target_vertices {
+        if runner.vertices_of(&result) <= target_vertices {
             lo = mid;
             best = result;
         } else {
@@ -85,6 +62,65 @@ pub fn simplify(
         }
     }
     (subset_body(template, &best), runs)
+}
+
+/// Simplifies `template` to at most `faces` faces in one run (a LOD level's budget).
+pub fn simplify_to_faces(
+    template: &TriMesh,
+    weights: &[f64],
+    variant: Variant,
+    faces: usize,
+) -> SimplifiedV1 {
+    subset_body(template, &Runner::new(template, weights, variant).run(faces))
+}
+
+/// One variant's meshoptimizer input: positions, indices, `Priority` flags, options.
+struct Runner {
+    positions: Vec<[f32; 3]>,
+    indices: Vec<u32>,
+    locks: Vec<SimplifyVertex>,
+    options: SimplifyOptions,
+}
+
+impl Runner {
+    fn new(template: &TriMesh, weights: &[f64], variant: Variant) -> Self {
+        let positions: Vec<[f32; 3]> =
+            template.positions.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect();
+        let indices: Vec<u32> = template.faces.iter().flatten().copied().collect();
+        let mut locks = vec![SimplifyVertex::None; positions.len()];
+        if variant == Variant::Priority {
+            let mut order: Vec<usize> = (0..weights.len()).collect();
+            order.sort_by(|&a, &b| weights[b].total_cmp(&weights[a]).then(a.cmp(&b)));
+            let flagged = (PRIORITY_FRACTION * positions.len() as f64).round() as usize;
+            for &v in order.iter().take(flagged) {
+                locks[v] = SimplifyVertex::Priority;
+            }
+        }
+        let options = match variant {
+            Variant::Regularize => SimplifyOptions::Regularize,
+            _ => SimplifyOptions::None,
+        };
+        Self { positions, indices, locks, options }
+    }
+
+    /// At most `faces` faces, the error unbounded so that the count alone stops it.
+    fn run(&self, faces: usize) -> Vec<u32> {
+        meshopt::simplify_with_locks_decoder(
+            &self.indices,
+            &self.positions,
+            &self.locks,
+            faces * 3,
+            f32::MAX,
+            self.options,
+            None,
+        )
+    }
+
+    fn vertices_of(&self, result: &[u32]) -> usize {
+        let mut used = vec![false; self.positions.len()];
+        result.iter().for_each(|&v| used[v as usize] = true);
+        used.iter().filter(|&&u| u).count()
+    }
 }
 
 /// The kept vertices in original index order, and the faces renumbered onto them.
