@@ -505,7 +505,8 @@ impl Editor<'_> {
         }
         let model = &cache[&own];
         let count = span.vertices.len();
-        let target = if key[0] == "attributes" { Some(ARRAY_BUFFER) } else { None };
+        // Attributes and morph target deltas are both vertex data (glTF 2.0 §3.6.2.4).
+        let target = if matches!(key[0], "attributes" | "targets") { Some(ARRAY_BUFFER) } else { None };
         let mut accessor =
             packed(bytes, count, model.component_code(), model.type_name(), model.size, target);
         if model.normalized {
