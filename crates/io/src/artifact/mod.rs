@@ -221,24 +221,38 @@ pub fn encode_artifact<T: ArtifactBody>(producer: &Producer, body: &T) -> (Vec<u
     let payload = codec::encode(&(producer, body));
     let hash = ContentHash::of(&payload);
     let mut bytes = Vec::with_capacity(HEADER_LEN + payload.len());
-    bytes.extend_from_slice(&MAGIC);
-    bytes.extend_from_slice(&(T::KIND as u16).to_le_bytes());
-    bytes.extend_from_slice(&T::KIND.current_version().to_le_bytes());
-    bytes.extend_from_slice(&[0u8; 4]);
-    bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    bytes.extend_from_slice(&hash.0);
+    bytes.extend_from_slice(&header::<T>(&payload, &hash));
     bytes.extend_from_slice(&payload);
     (bytes, hash)
 }
 
-/// Writes an artifact atomically; returns its content hash.
+/// The header of an artifact of kind `T` with `payload` and its content `hash`.
+fn header<T: ArtifactBody>(payload: &[u8], hash: &ContentHash) -> [u8; HEADER_LEN] {
+    let mut header = [0u8; HEADER_LEN];
+    header[..MAGIC.len()].copy_from_slice(&MAGIC);
+    header[8..10].copy_from_slice(&(T::KIND as u16).to_le_bytes());
+    header[10..12].copy_from_slice(&T::KIND.current_version().to_le_bytes());
+    // Bytes 12..16 are reserved and stay zero.
+    header[16..24].copy_from_slice(&(payload.len() as u64).to_le_bytes());
+    header[24..56].copy_from_slice(&hash.0);
+    header
+}
+
+/// Writes an artifact atomically; returns its content hash. The header and the payload
+/// are written one after the other, never joined in memory: a pose set's payload can be
+/// hundreds of megabytes.
 pub fn write_artifact<T: ArtifactBody>(
     path: &Path,
     producer: &Producer,
     body: &T,
 ) -> Result<ContentHash, IoError> {
-    let (bytes, hash) = encode_artifact(producer, body);
-    crate::atomic::write_atomic(path, &bytes)?;
+    use std::io::Write as _;
+    let payload = codec::encode(&(producer, body));
+    let hash = ContentHash::of(&payload);
+    crate::atomic::write_atomic_with(path, |w| {
+        w.write_all(&header::<T>(&payload, &hash))?;
+        w.write_all(&payload)
+    })?;
     Ok(hash)
 }
 
