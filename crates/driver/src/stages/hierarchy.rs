@@ -20,7 +20,7 @@ use std::borrow::Cow;
 
 use anyhow::{Result, bail};
 use desal_hierarchy::{
-    ChainLevel, Coarse, CsrMatrix, FittedConfig, LevelInput, Neighbourhood, Upsampled, Upsampler, V2f,
+    ChainLevel, Coarse, CsrMatrix, FittedConfig, Level, LevelInput, Neighbourhood, Upsampled, Upsampler, V2f,
     adjacency, build_level, composed_upsamplers, level_poses, nest, selection, upsampling_errors,
 };
 use desal_io::artifact::{ArtifactKind, ContentHash, HierarchyLevelV1};
@@ -389,8 +389,52 @@ pub fn compute_level(
     let start = std::time::Instant::now();
     let step = parents.len();
     settings.hierarchy.check_levels(Some(full.vertex_count()))?;
+    let (body, level) = build_coarse_level(settings, step, full, labels, parents.last().copied(), progress)?;
+    let seconds = start.elapsed().as_secs_f64();
+
+    let mut levels: Vec<&HierarchyLevelV1> = parents.to_vec();
+    levels.push(&body);
+    let fitted = measured_fitted(Some(settings.hierarchy))?;
+    let heldout_start = std::time::Instant::now();
+    let v2f = if settings.hierarchy.heldout_v2f { V2f::Measure } else { V2f::Skip };
+    let [heldout_fitted, heldout_barycentric] =
+        heldout(full, &levels, [&fitted, &Upsampler::Barycentric], settings.chain.saliency, v2f)?;
+    let r = &level.report;
+    let summary = LevelSummary {
+        level: step + 1,
+        fine_vertices: r.fine_vertices,
+        vertices: r.coarse_vertices,
+        faces: r.coarse_faces,
+        upsampler: r.upsampler.into(),
+        training_poses: r.training_poses,
+        up_nnz: r.up_nnz,
+        down_nnz: level.down.nnz(),
+        adjacency_nnz: level.coarse_adjacency.nnz(),
+        up_mean_row_nnz: r.up_mean_row_nnz,
+        up_max_row_sum_error: r.up_max_row_sum_error,
+        seconds,
+        matrices_seconds: r.seconds,
+        heldout_seconds: heldout_start.elapsed().as_secs_f64(),
+        heldout_mse_ratio: heldout_fitted.mse / heldout_barycentric.mse,
+        heldout_fitted,
+        heldout_barycentric,
+    };
+    let note = summary.note();
+    Ok(StageOutput { body, summary, note })
+}
+
+/// Level step `step`'s artifact and matrices: stages 1–4 on the pose set of the level
+/// above (`parent`, level 0 when `None`), then D, U and A. That pose set and the stages'
+/// results are dropped on return, before the held-out measurement, which reads level 0.
+fn build_coarse_level(
+    settings: &LevelSettings,
+    step: usize,
+    full: &PoseSet,
+    labels: &PartLabels,
+    parent: Option<&HierarchyLevelV1>,
+    progress: &dyn Progress,
+) -> Result<(HierarchyLevelV1, Level)> {
     let upsampler = settings.hierarchy.config()?;
-    let parent = parents.last().copied();
     let (fine, fine_labels) = level_pose_set(full, labels, parent)?;
 
     // Stages 1–4 on this level's pose set, as on level 0, in memory: the level is one
@@ -426,37 +470,7 @@ pub fn compute_level(
         up_col: coo.col,
         up_data: coo.data,
     };
-    let seconds = start.elapsed().as_secs_f64();
-
-    let mut levels: Vec<&HierarchyLevelV1> = parents.to_vec();
-    levels.push(&body);
-    let fitted = measured_fitted(Some(settings.hierarchy))?;
-    let heldout_start = std::time::Instant::now();
-    let v2f = if settings.hierarchy.heldout_v2f { V2f::Measure } else { V2f::Skip };
-    let [heldout_fitted, heldout_barycentric] =
-        heldout(full, &levels, [&fitted, &Upsampler::Barycentric], settings.chain.saliency, v2f)?;
-    let r = &level.report;
-    let summary = LevelSummary {
-        level: step + 1,
-        fine_vertices: r.fine_vertices,
-        vertices: r.coarse_vertices,
-        faces: r.coarse_faces,
-        upsampler: r.upsampler.into(),
-        training_poses: r.training_poses,
-        up_nnz: r.up_nnz,
-        down_nnz: level.down.nnz(),
-        adjacency_nnz: level.coarse_adjacency.nnz(),
-        up_mean_row_nnz: r.up_mean_row_nnz,
-        up_max_row_sum_error: r.up_max_row_sum_error,
-        seconds,
-        matrices_seconds: r.seconds,
-        heldout_seconds: heldout_start.elapsed().as_secs_f64(),
-        heldout_mse_ratio: heldout_fitted.mse / heldout_barycentric.mse,
-        heldout_fitted,
-        heldout_barycentric,
-    };
-    let note = summary.note();
-    Ok(StageOutput { body, summary, note })
+    Ok((body, level))
 }
 
 /// The poses each fold of the held-out upsampling error measures (the others train):
