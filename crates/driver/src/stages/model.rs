@@ -23,6 +23,8 @@ use desal_bodymodel::{
     BodyModel, SampleConfig, Sampler, SubsetConfig, SubsetReport, labels_from_weights, subset_model,
 };
 use desal_io::artifact::{ArtifactKind, ContentHash, LabelsV1, MapV1, PoseSetV2};
+use desal_mesh::PoseSet;
+use desal_mesh::math::{vec3_from_f32, vec3_to_f32};
 use desal_simplify::Placement;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
@@ -178,7 +180,7 @@ impl ModelInput<'_> {
         }
         let per_shape = config.poses;
         let mut names = Vec::with_capacity(samples);
-        let mut positions = Vec::with_capacity(samples);
+        let mut poses = Vec::with_capacity(samples);
         let mut groups = Vec::with_capacity(samples);
         for (k, (group, vertices)) in Sampler::new(&model, config)?.enumerate() {
             groups.push(group as u32);
@@ -187,11 +189,15 @@ impl ModelInput<'_> {
             } else {
                 format!("s{:03}-p{:03}", group - 1, (k - 1) % per_shape)
             });
-            positions.push(vertices.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
+            // At the artifact's precision, so that the summary is the stored set's.
+            poses.push(vertices.iter().map(|p| vec3_from_f32(vec3_to_f32(p))).collect());
         }
-        let body = PoseSetV2 { names, template: 0, faces: model.faces.clone(), positions, groups };
-        let set = body.to_pose_set().with_context(|| format!("{}", self.file.display()))?;
+        let set = PoseSet::try_new(names, poses, model.faces.clone(), 0)
+            .and_then(|set| set.with_groups(Some(groups)))
+            .with_context(|| format!("{}", self.file.display()))?;
         let summary = IngestSummary::of(&set, desal_mesh::FaceCleanup::default());
+        // The set is handed over pose by pose: never held at both precisions.
+        let body = PoseSetV2::from_owned_pose_set(set);
         let note = format!(
             "{} model: {} vertices, {} joints; template + {} shapes × {per_shape} poses",
             model.kind.name(),
@@ -203,7 +209,7 @@ impl ModelInput<'_> {
     }
 
     /// Labels: the skinning weights' dominant joints, merged to about `parts` parts.
-    pub fn compute_labels(&self, set: &desal_mesh::PoseSet) -> Result<StageOutput<LabelsV1, LabelsSummary>> {
+    pub fn compute_labels(&self, set: &PoseSet) -> Result<StageOutput<LabelsV1, LabelsSummary>> {
         let model = self.load()?;
         if model.vertex_count() != set.vertex_count() {
             bail!("{}: the model has changed since its pose set was made", self.file.display());
