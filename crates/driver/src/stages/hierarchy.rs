@@ -450,6 +450,8 @@ fn build_coarse_level(
     let stages = chain(&mut Memory, ChainSettings { simplify: &params, ..settings.chain }, &input, progress)?;
     let coarse_to_fine = stages.map.body()?.simp_to_orig.clone();
     let faces = stages.simplified.body()?.faces.clone();
+    // Only the map is read on: stage 1's residuals go back before U's fit.
+    drop(stages);
 
     let mask = training_mask(&fine, settings.chain.saliency);
     let input =

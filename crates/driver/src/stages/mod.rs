@@ -228,10 +228,7 @@ pub fn run_stages(
         meshes: mesh_plan.as_ref(),
     };
     let settings = ChainSettings { fit: inputs.fit, saliency: inputs.saliency, simplify: inputs.simplify };
-    let Chain { mut fit, saliency, simplified, map } = chain(runner, settings, &input, progress)?;
-    // Stage 1's residuals (one per pose and vertex) are read by stage 2 only: what a
-    // computed fit holds goes back before the hierarchy; its cache entry has it.
-    drop(fit.take_held_body());
+    let Chain { fit, saliency, simplified, map } = chain(runner, settings, &input, progress)?;
 
     // Hierarchy: one stage per coarse level, each from the level above.
     let hierarchy = match inputs.hierarchy {
