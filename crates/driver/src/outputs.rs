@@ -143,6 +143,12 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
     let set = stages.pose_set()?;
     let part_labels = stages.part_labels()?;
     let map = stages.map.body()?;
+    // Built before anything is written, like the rig below, and before the simplified
+    // pose set: reading the model takes a few times its file's size for a moment.
+    let model_files = match &stages.model {
+        Some(model) => simplified_model_files(model, map)?,
+        None => Vec::new(),
+    };
     let (simple_set, simple_labels) = crate::stages::map::apply(map, set, part_labels)?;
     let mut outputs = DatasetOutputs { artifacts: Vec::new(), files: Vec::new() };
     add_saliency_pictures(
@@ -169,13 +175,7 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
     if !stages.hierarchy.is_empty() {
         add_hierarchy(&mut outputs, stages, set, part_labels, up_axis)?;
     }
-    if let Some(model) = &stages.model {
-        // Built before anything is written, like the rig below.
-        let (bytes, summary) = crate::stages::model::simplified_model(model, map)?;
-        outputs.files.push(("model.npz".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, &bytes)?))));
-        let summary = serde_json::to_value(&summary)?;
-        outputs.files.push(("model.json".into(), Box::new(move |p| Ok(desal_io::write_json(p, &summary)?))));
-    }
+    outputs.files.extend(model_files);
     if let Some(rig) = &stages.rig {
         // Built before anything is written: a rig that cannot be written fails the run
         // with the output folder untouched.
@@ -209,6 +209,19 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
         add_rig_images(&mut outputs, &rig.file, edited.images)?;
     }
     Ok(outputs)
+}
+
+/// `model.npz` and `model.json`: the model on the simplified vertices.
+fn simplified_model_files(
+    model: &crate::stages::model::ModelSource,
+    map: &MapV1,
+) -> Result<Vec<(String, FileWriter)>> {
+    let (bytes, summary) = crate::stages::model::simplified_model(model, map)?;
+    let summary = serde_json::to_value(&summary)?;
+    Ok(vec![
+        ("model.npz".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, &bytes)?))),
+        ("model.json".into(), Box::new(move |p| Ok(desal_io::write_json(p, &summary)?))),
+    ])
 }
 
 /// The images the simplified rig names by URI, under the same relative paths as beside

@@ -6,6 +6,8 @@
 //! Index spaces: each level's `coarse_to_fine` indexes the level above it; level 0 is
 //! `full`. The composed upsampler of level k is `n_0 × n_k`.
 
+use std::borrow::Cow;
+
 use desal_mesh::{Face, PoseSet};
 
 use crate::error::HierarchyError;
@@ -78,8 +80,12 @@ pub fn composed_upsamplers_per_mask(
     let mut composed: Vec<Vec<CsrMatrix>> = masks.iter().map(|_| Vec::with_capacity(chain.len())).collect();
     let mut fine_to_orig: Vec<u32> = (0..full.vertex_count() as u32).collect();
     let mut fine_faces: Vec<Face> = full.faces.clone();
-    for level in chain {
-        let fine = level_poses(full, &fine_to_orig, &fine_faces)?;
+    for (k, level) in chain.iter().enumerate() {
+        // Level 0 is `full` itself, borrowed: a copy would double the largest pose set.
+        let fine = match k {
+            0 => Cow::Borrowed(full),
+            _ => Cow::Owned(level_poses(full, &fine_to_orig, &fine_faces)?),
+        };
         let input = LevelInput {
             fine: &fine,
             coarse_to_fine: level.coarse_to_fine,

@@ -115,7 +115,7 @@ pub fn fitted_rows_per_training(
     }
 
     let groups = PoseGroups::new(trainings);
-    let trajectories = Trajectories::new(fine, &groups.poses);
+    let trajectories = Trajectories::new(fine, coarse_to_fine, &groups.poses);
     let solved: Vec<Vec<(Row, Solve)>> = (0..fine.vertex_count())
         .into_par_iter()
         .map_init(
@@ -135,8 +135,9 @@ pub fn fitted_rows_per_training(
                     }
                 };
                 let candidates = candidates(nearest, &barycentric[fine_idx]);
-                let row = FineRow { fine_idx, candidates: &candidates, barycentric: &barycentric[fine_idx] };
-                fit_rows(&trajectories, &groups, coarse_to_fine, &row, config.ridge)
+                let own = trajectories.gather(fine, fine_idx);
+                let row = FineRow { own: &own, candidates: &candidates, barycentric: &barycentric[fine_idx] };
+                fit_rows(&trajectories, &groups, &row, config.ridge)
             },
         )
         .collect();
@@ -205,30 +206,45 @@ impl PoseGroups {
     }
 }
 
-/// Every fine vertex's coordinates over the given poses, vertex-major (`[x, y, z]` per
+/// The coarse vertices' coordinates over the given poses, vertex-major (`[x, y, z]` per
 /// pose): a row's solve reads its candidates' blocks contiguously instead of striding
-/// across one array per pose.
+/// across one array per pose. Only the coarse vertices are held (a fifth of the fine
+/// ones or fewer): every fine vertex's own trajectory is read once, by its own row
+/// ([`Trajectories::gather`]), so a copy of the whole pose set is never made.
 struct Trajectories {
-    poses: usize,
+    poses: Vec<usize>,
     coords: Vec<Real>,
 }
 
 impl Trajectories {
-    fn new(fine: &PoseSet, poses: &[usize]) -> Self {
+    fn new(fine: &PoseSet, coarse_to_fine: &[u32], poses: &[usize]) -> Self {
         let width = 3 * poses.len();
-        let mut coords = vec![0.0; fine.vertex_count() * width];
-        coords.par_chunks_mut(width).enumerate().for_each(|(v, block)| {
-            for (slot, &p) in block.chunks_exact_mut(3).zip(poses) {
-                let q = fine.poses[p][v];
-                slot.copy_from_slice(&[q.x, q.y, q.z]);
-            }
+        let mut coords = vec![0.0; coarse_to_fine.len() * width];
+        coords.par_chunks_mut(width).zip(coarse_to_fine).for_each(|(block, &fine_idx)| {
+            Self::fill(fine, fine_idx as usize, poses, block);
         });
-        Self { poses: poses.len(), coords }
+        Self { poses: poses.to_vec(), coords }
     }
 
-    fn of(&self, vertex: usize) -> &[Real] {
-        let width = 3 * self.poses;
-        &self.coords[vertex * width..(vertex + 1) * width]
+    /// Fine vertex `fine_idx`'s coordinates over the poses into `block` (`3 × poses`).
+    fn fill(fine: &PoseSet, fine_idx: usize, poses: &[usize], block: &mut [Real]) {
+        for (slot, &p) in block.chunks_exact_mut(3).zip(poses) {
+            let q = fine.poses[p][fine_idx];
+            slot.copy_from_slice(&[q.x, q.y, q.z]);
+        }
+    }
+
+    /// Coarse vertex `coarse_idx`'s trajectory.
+    fn of(&self, coarse_idx: usize) -> &[Real] {
+        let width = 3 * self.poses.len();
+        &self.coords[coarse_idx * width..(coarse_idx + 1) * width]
+    }
+
+    /// Fine vertex `fine_idx`'s trajectory over the same poses, laid out as [`Self::of`]'s.
+    fn gather(&self, fine: &PoseSet, fine_idx: usize) -> Vec<Real> {
+        let mut block = vec![0.0; 3 * self.poses.len()];
+        Self::fill(fine, fine_idx, &self.poses, &mut block);
+        block
     }
 }
 
@@ -252,9 +268,10 @@ fn candidates(mut c: Vec<u32>, barycentric: &Row) -> Vec<u32> {
     c
 }
 
-/// One fine vertex to fit: its candidates (ascending `coarse_idx`) and barycentric row.
+/// One fine vertex to fit: its trajectory (laid out as the candidates'), its candidates
+/// (ascending `coarse_idx`) and barycentric row.
 struct FineRow<'a> {
-    fine_idx: usize,
+    own: &'a [Real],
     candidates: &'a [u32],
     barycentric: &'a Row,
 }
@@ -264,7 +281,6 @@ struct FineRow<'a> {
 fn fit_rows(
     trajectories: &Trajectories,
     groups: &PoseGroups,
-    coarse_to_fine: &[u32],
     row: &FineRow,
     ridge: Real,
 ) -> Vec<(Row, Solve)> {
@@ -283,10 +299,10 @@ fn fit_rows(
     // here over every group's poses, column by column: plain slices, which the compiler
     // vectorises (the matrix's column iterators cost ~20 instructions an entry), and no
     // zero fill first.
-    let own = trajectories.of(row.fine_idx);
+    let own = row.own;
     let mut d: Vec<Real> = Vec::with_capacity(own.len() * m);
     for &c in candidates {
-        let theirs = trajectories.of(coarse_to_fine[c as usize] as usize);
+        let theirs = trajectories.of(c as usize);
         d.extend(theirs.iter().zip(own).map(|(t, o)| t - o));
     }
     let columns: Vec<&[Real]> = d.chunks_exact(own.len()).collect();

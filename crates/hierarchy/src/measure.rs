@@ -15,6 +15,10 @@ use rayon::prelude::*;
 use crate::error::HierarchyError;
 use crate::sparse::CsrMatrix;
 
+/// Poses measured at once by [`upsampling_errors`]: enough to keep every thread busy,
+/// few enough that their per-vertex distances stay small beside the pose set.
+const MEASURED_CHUNK: usize = 64;
+
 /// One pose's upsampling error, m².
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PoseError {
@@ -128,51 +132,61 @@ fn upsampling_errors_with(
     // An upsampled mesh has the truth's faces and vertex i lies near truth vertex i, so
     // every v2f query starts from a face of its own vertex.
     let seeds = if v2f == V2f::Measure { vertex_faces(&full.faces, n0) } else { Vec::new() };
-    // Per pose, per candidate: the pose's error and its per-vertex squared distances.
-    let measured: Vec<Vec<(PoseError, Vec<Real>)>> = poses
-        .par_iter()
-        .enumerate()
-        .map(|(slot, &pose)| {
-            let truth = full.pose_mesh(pose);
-            let built;
-            let truth_surface = match (v2f, truth_index) {
-                (V2f::Skip, _) => None,
-                (V2f::Measure, Some(given)) => Some(&given[pose]),
-                (V2f::Measure, None) => {
-                    built = SurfaceIndex::new(&truth);
-                    Some(&built)
-                }
-            };
-            candidates
-                .iter()
-                .map(|c| {
-                    let up = upsample_pose(full, c, slot, pose);
-                    let squared = squared_errors(&up, &full.poses[pose]);
-                    let v2f = truth_surface.as_ref().map(|surface| {
-                        // The upsampled mesh has the truth's faces and lies near it, so
-                        // the truth's tree refitted serves it as well as a new one.
-                        let up_mesh = TriMesh { positions: up, faces: full.faces.clone() };
-                        v2f_halves_same_faces(&up_mesh, &surface.refit(&up_mesh), &truth, surface, &seeds)
-                            .combined()
-                    });
-                    (PoseError { pose, mse: mean(&squared), v2f }, squared)
-                })
-                .collect()
-        })
-        .collect();
-
-    Ok((0..candidates.len())
-        .map(|c| {
-            let mut vertex_mse = vec![0.0; n0];
-            for per_candidate in &measured {
-                for (acc, s) in vertex_mse.iter_mut().zip(&per_candidate[c].1) {
+    // Per pose, per candidate: the pose's error and its per-vertex squared distances,
+    // measured in parallel a chunk of poses at a time and summed in pose order, so that
+    // the per-vertex distances of every pose are never held at once.
+    let mut per_pose: Vec<Vec<PoseError>> = vec![Vec::with_capacity(poses.len()); candidates.len()];
+    let mut vertex_mse: Vec<Vec<Real>> = vec![vec![0.0; n0]; candidates.len()];
+    for (chunk, chunk_poses) in poses.chunks(MEASURED_CHUNK).enumerate() {
+        let measured: Vec<Vec<(PoseError, Vec<Real>)>> = chunk_poses
+            .par_iter()
+            .enumerate()
+            .map(|(k, &pose)| {
+                let slot = chunk * MEASURED_CHUNK + k;
+                let truth = full.pose_mesh(pose);
+                let built;
+                let truth_surface = match (v2f, truth_index) {
+                    (V2f::Skip, _) => None,
+                    (V2f::Measure, Some(given)) => Some(&given[pose]),
+                    (V2f::Measure, None) => {
+                        built = SurfaceIndex::new(&truth);
+                        Some(&built)
+                    }
+                };
+                candidates
+                    .iter()
+                    .map(|c| {
+                        let up = upsample_pose(full, c, slot, pose);
+                        let squared = squared_errors(&up, &full.poses[pose]);
+                        let v2f = truth_surface.as_ref().map(|surface| {
+                            // The upsampled mesh has the truth's faces and lies near it, so
+                            // the truth's tree refitted serves it as well as a new one.
+                            let up_mesh = TriMesh { positions: up, faces: full.faces.clone() };
+                            v2f_halves_same_faces(&up_mesh, &surface.refit(&up_mesh), &truth, surface, &seeds)
+                                .combined()
+                        });
+                        (PoseError { pose, mse: mean(&squared), v2f }, squared)
+                    })
+                    .collect()
+            })
+            .collect();
+        for per_candidate in measured {
+            for (c, (error, squared)) in per_candidate.into_iter().enumerate() {
+                for (acc, s) in vertex_mse[c].iter_mut().zip(&squared) {
                     *acc += s;
                 }
+                per_pose[c].push(error);
             }
+        }
+    }
+
+    Ok(per_pose
+        .into_iter()
+        .zip(vertex_mse)
+        .map(|(per_pose, mut vertex_mse)| {
             for v in &mut vertex_mse {
-                *v /= measured.len().max(1) as Real;
+                *v /= per_pose.len().max(1) as Real;
             }
-            let per_pose: Vec<PoseError> = measured.iter().map(|m| m[c].0).collect();
             let mse = mean(&per_pose.iter().map(|e| e.mse).collect::<Vec<_>>());
             let v2f = per_pose.iter().map(|e| e.v2f).collect::<Option<Vec<_>>>().map(|v| mean(&v));
             UpsamplingError { per_pose, mse, v2f, vertex_mse }

@@ -37,6 +37,15 @@ pub fn encode<T: Serialize>(value: &T) -> Vec<u8> {
         .expect("serialising plain in-memory artifact structs cannot fail")
 }
 
+/// Encodes `value` into `writer`, the bytes [`encode`] gives; returns how many there were.
+/// Bincode writes each field on its own, so `writer` should buffer.
+pub fn encode_into<T: Serialize>(value: &T, writer: &mut impl std::io::Write) -> std::io::Result<usize> {
+    bincode::serde::encode_into_std_write(value, writer, bincode::config::standard()).map_err(|e| match e {
+        bincode::error::EncodeError::Io { inner, .. } => inner,
+        other => panic!("serialising plain in-memory artifact structs cannot fail: {other}"),
+    })
+}
+
 /// Decodes a `T` from the start of `bytes`; returns it with the number of bytes used.
 /// Allocations are bounded by a limit derived from `bytes.len()` (see the module doc).
 pub fn decode_prefix<T: DeserializeOwned>(bytes: &[u8]) -> Result<(T, usize), String> {

@@ -232,6 +232,9 @@ fn artifact_round_trips_and_refuses_corruption() {
     assert_eq!(back.to_pose_set().unwrap(), small_pose_set());
 
     let bytes = std::fs::read(&path).unwrap();
+    // The file is written header then payload, never joined in memory: the same bytes
+    // as the in-memory encoding.
+    assert_eq!((bytes.clone(), hash), artifact::encode_artifact(&producer(), &body));
     let refuse = |bytes: &[u8]| {
         std::fs::write(&path, bytes).unwrap();
         artifact::read_artifact::<PoseSetV2>(&path).unwrap_err()

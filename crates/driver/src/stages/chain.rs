@@ -79,7 +79,7 @@ pub fn chain(
     let (set, labels) = (input.set, input.labels);
 
     // Stage 1: per-part rigid fit of the template onto every pose.
-    let fitted = store.stage(
+    let mut fitted = store.stage(
         Stage::Fit,
         || {
             let (poses, labels) = input.hashes()?;
@@ -96,6 +96,9 @@ pub fn chain(
         &[],
         || saliency::compute(settings.saliency, fitted.body()?, set()?.template_mesh().diagonal()),
     )?;
+    // The residuals (one per pose and vertex) are read by stage 2 only: a computed fit's
+    // go back now when its cache entry holds them.
+    drop(fitted.take_held_body());
 
     // Stage 3: the template simplified by the configured method, keeping the seams it
     // is handed as polylines (keyed by their content); a rig's meshes by their plan.

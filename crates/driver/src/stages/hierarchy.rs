@@ -20,7 +20,7 @@ use std::borrow::Cow;
 
 use anyhow::{Result, bail};
 use desal_hierarchy::{
-    ChainLevel, Coarse, CsrMatrix, FittedConfig, LevelInput, Neighbourhood, Upsampled, Upsampler, V2f,
+    ChainLevel, Coarse, CsrMatrix, FittedConfig, Level, LevelInput, Neighbourhood, Upsampled, Upsampler, V2f,
     adjacency, build_level, composed_upsamplers, level_poses, nest, selection, upsampling_errors,
 };
 use desal_io::artifact::{ArtifactKind, ContentHash, HierarchyLevelV1};
@@ -389,43 +389,7 @@ pub fn compute_level(
     let start = std::time::Instant::now();
     let step = parents.len();
     settings.hierarchy.check_levels(Some(full.vertex_count()))?;
-    let upsampler = settings.hierarchy.config()?;
-    let parent = parents.last().copied();
-    let (fine, fine_labels) = level_pose_set(full, labels, parent)?;
-
-    // Stages 1–4 on this level's pose set, as on level 0, in memory: the level is one
-    // cached stage.
-    let params = settings.simplify_params(step);
-    let input = ChainInput {
-        set: &|| Ok(&fine),
-        labels: &|| Ok(&fine_labels),
-        hashes: None,
-        seams: None,
-        meshes: None,
-    };
-    let stages = chain(&mut Memory, ChainSettings { simplify: &params, ..settings.chain }, &input, progress)?;
-    let coarse_to_fine = stages.map.body()?.simp_to_orig.clone();
-    let faces = stages.simplified.body()?.faces.clone();
-
-    let mask = training_mask(&fine, settings.chain.saliency);
-    let input =
-        LevelInput { fine: &fine, coarse_to_fine: &coarse_to_fine, coarse_faces: &faces, training: &mask };
-    let level = build_level(&input, &upsampler)?;
-    let fine_to_orig: Vec<u32> = match parent {
-        Some(p) => p.coarse_to_orig.clone(),
-        None => (0..full.vertex_count() as u32).collect(),
-    };
-    let coo = level.up.to_coo();
-    let body = HierarchyLevelV1 {
-        fine_vertices: fine.vertex_count() as u32,
-        coarse_to_orig: nest(&fine_to_orig, &coarse_to_fine),
-        coarse_to_fine,
-        faces,
-        upsampler: upsampler.name().into(),
-        up_row: coo.row,
-        up_col: coo.col,
-        up_data: coo.data,
-    };
+    let (body, level) = build_coarse_level(settings, step, full, labels, parents.last().copied(), progress)?;
     let seconds = start.elapsed().as_secs_f64();
 
     let mut levels: Vec<&HierarchyLevelV1> = parents.to_vec();
@@ -457,6 +421,58 @@ pub fn compute_level(
     };
     let note = summary.note();
     Ok(StageOutput { body, summary, note })
+}
+
+/// Level step `step`'s artifact and matrices: stages 1–4 on the pose set of the level
+/// above (`parent`, level 0 when `None`), then D, U and A. That pose set and the stages'
+/// results are dropped on return, before the held-out measurement, which reads level 0.
+fn build_coarse_level(
+    settings: &LevelSettings,
+    step: usize,
+    full: &PoseSet,
+    labels: &PartLabels,
+    parent: Option<&HierarchyLevelV1>,
+    progress: &dyn Progress,
+) -> Result<(HierarchyLevelV1, Level)> {
+    let upsampler = settings.hierarchy.config()?;
+    let (fine, fine_labels) = level_pose_set(full, labels, parent)?;
+
+    // Stages 1–4 on this level's pose set, as on level 0, in memory: the level is one
+    // cached stage.
+    let params = settings.simplify_params(step);
+    let input = ChainInput {
+        set: &|| Ok(&fine),
+        labels: &|| Ok(&fine_labels),
+        hashes: None,
+        seams: None,
+        meshes: None,
+    };
+    let stages = chain(&mut Memory, ChainSettings { simplify: &params, ..settings.chain }, &input, progress)?;
+    let coarse_to_fine = stages.map.body()?.simp_to_orig.clone();
+    let faces = stages.simplified.body()?.faces.clone();
+    // Only the map is read on: stage 1's residuals go back before U's fit.
+    drop(stages);
+
+    let mask = training_mask(&fine, settings.chain.saliency);
+    let input =
+        LevelInput { fine: &fine, coarse_to_fine: &coarse_to_fine, coarse_faces: &faces, training: &mask };
+    let level = build_level(&input, &upsampler)?;
+    let fine_to_orig: Vec<u32> = match parent {
+        Some(p) => p.coarse_to_orig.clone(),
+        None => (0..full.vertex_count() as u32).collect(),
+    };
+    let coo = level.up.to_coo();
+    let body = HierarchyLevelV1 {
+        fine_vertices: fine.vertex_count() as u32,
+        coarse_to_orig: nest(&fine_to_orig, &coarse_to_fine),
+        coarse_to_fine,
+        faces,
+        upsampler: upsampler.name().into(),
+        up_row: coo.row,
+        up_col: coo.col,
+        up_data: coo.data,
+    };
+    Ok((body, level))
 }
 
 /// The poses each fold of the held-out upsampling error measures (the others train):

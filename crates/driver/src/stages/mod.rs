@@ -21,7 +21,7 @@ pub mod saliency;
 pub mod seams;
 pub mod simplify;
 
-use std::cell::OnceCell;
+use std::cell::{Cell, OnceCell};
 use std::path::Path;
 
 use anyhow::Result;
@@ -102,9 +102,9 @@ pub struct Counts {
 }
 
 impl DatasetStages {
-    /// The ingested pose set, decoded on first use.
+    /// The ingested pose set, decoded on first use (its artifact body is not kept).
     pub fn pose_set(&self) -> Result<&PoseSet> {
-        get_or_try_init(&self.pose_set, || Ok(self.poses.body()?.to_pose_set()?))
+        get_or_try_init(&self.pose_set, || Ok(self.poses.decode_entry()?.into_pose_set()?))
     }
 
     /// The part labels, decoded on first use; a rig's with its joints' tree
@@ -137,7 +137,7 @@ pub fn run_stages(
 ) -> Result<DatasetStages> {
     // Ingest: keyed on the bytes of every pose file (or of the rig or the model), never on
     // their paths.
-    let poses = match (&inputs.rig, &inputs.model) {
+    let mut poses = match (&inputs.rig, &inputs.model) {
         (Some(rig), _) => {
             runner.stage(Stage::Ingest, || rig.ingest_key(), &rig.hints(), || rig.compute_poses())?
         }
@@ -154,9 +154,19 @@ pub fn run_stages(
             )?
         }
     };
-    // Decoded once, and only if a later stage has to run.
+    // Decoded once, and only if a later stage has to run. The artifact body (f32) is
+    // converted into the set, not kept beside it: a model source's is hundreds of MB.
+    let held = Cell::new(poses.take_held_body());
     let set_cell = OnceCell::new();
-    let set = || -> Result<&PoseSet> { get_or_try_init(&set_cell, || Ok(poses.body()?.to_pose_set()?)) };
+    let set = || -> Result<&PoseSet> {
+        get_or_try_init(&set_cell, || {
+            let body = match held.take() {
+                Some(body) => body,
+                None => poses.decode_entry()?,
+            };
+            Ok(body.into_pose_set()?)
+        })
+    };
 
     // Labels: a file validated against the pose set and keyed on its bytes, or parts
     // discovered from the poses and keyed on their parameters and the poses' hash.

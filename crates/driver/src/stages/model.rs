@@ -23,6 +23,8 @@ use desal_bodymodel::{
     BodyModel, SampleConfig, Sampler, SubsetConfig, SubsetReport, labels_from_weights, subset_model,
 };
 use desal_io::artifact::{ArtifactKind, ContentHash, LabelsV1, MapV1, PoseSetV2};
+use desal_mesh::PoseSet;
+use desal_mesh::math::{vec3_from_f32, vec3_to_f32};
 use desal_simplify::Placement;
 use serde::{Deserialize, Serialize};
 use serde_json::json;
@@ -37,7 +39,9 @@ use crate::stages::simplify::SimplifyParams;
 pub const MODEL_STAGE_VERSION: u32 = 1;
 
 /// The most positions (samples × vertices) a model source makes: the rig's cap
-/// ([`desal_rig::MAX_POSE_VERTICES`], 2^25, about 2.3 GB of peak memory in `desal run`).
+/// ([`desal_rig::MAX_POSE_VERTICES`], 2^25). A model source's `desal run` with a
+/// two-level hierarchy peaks near 39 bytes a position (the 2048-sample benchmark, 27.4 M
+/// positions: 1.08 GB; BENCHMARKS.md "Issue 41, item 4"), so about 1.3 GB at the cap.
 pub const MAX_POSITIONS: usize = desal_rig::MAX_POSE_VERTICES;
 
 /// `[dataset.model]`.
@@ -178,7 +182,7 @@ impl ModelInput<'_> {
         }
         let per_shape = config.poses;
         let mut names = Vec::with_capacity(samples);
-        let mut positions = Vec::with_capacity(samples);
+        let mut poses = Vec::with_capacity(samples);
         let mut groups = Vec::with_capacity(samples);
         for (k, (group, vertices)) in Sampler::new(&model, config)?.enumerate() {
             groups.push(group as u32);
@@ -187,11 +191,15 @@ impl ModelInput<'_> {
             } else {
                 format!("s{:03}-p{:03}", group - 1, (k - 1) % per_shape)
             });
-            positions.push(vertices.iter().map(|p| [p.x as f32, p.y as f32, p.z as f32]).collect());
+            // At the artifact's precision, so that the summary is the stored set's.
+            poses.push(vertices.iter().map(|p| vec3_from_f32(vec3_to_f32(p))).collect());
         }
-        let body = PoseSetV2 { names, template: 0, faces: model.faces.clone(), positions, groups };
-        let set = body.to_pose_set().with_context(|| format!("{}", self.file.display()))?;
+        let set = PoseSet::try_new(names, poses, model.faces.clone(), 0)
+            .and_then(|set| set.with_groups(Some(groups)))
+            .with_context(|| format!("{}", self.file.display()))?;
         let summary = IngestSummary::of(&set, desal_mesh::FaceCleanup::default());
+        // The set is handed over pose by pose: never held at both precisions.
+        let body = PoseSetV2::from_owned_pose_set(set);
         let note = format!(
             "{} model: {} vertices, {} joints; template + {} shapes × {per_shape} poses",
             model.kind.name(),
@@ -203,7 +211,7 @@ impl ModelInput<'_> {
     }
 
     /// Labels: the skinning weights' dominant joints, merged to about `parts` parts.
-    pub fn compute_labels(&self, set: &desal_mesh::PoseSet) -> Result<StageOutput<LabelsV1, LabelsSummary>> {
+    pub fn compute_labels(&self, set: &PoseSet) -> Result<StageOutput<LabelsV1, LabelsSummary>> {
         let model = self.load()?;
         if model.vertex_count() != set.vertex_count() {
             bail!("{}: the model has changed since its pose set was made", self.file.display());

@@ -143,10 +143,25 @@ impl<T: ArtifactBody, S> Staged<T, S> {
         if let Some(body) = self.body.get() {
             return Ok(body);
         }
-        // A cache entry, which a shard sharing the cache may be replacing.
+        let body = self.decode_entry()?;
+        Ok(self.body.get_or_init(|| body))
+    }
+
+    /// The body decoded from the cache entry (which a shard sharing the cache may be
+    /// replacing), not kept: for a body converted once and not read again, such as the
+    /// pose set, whose f32 arrays would otherwise sit beside its f64 `PoseSet`.
+    pub fn decode_entry(&self) -> Result<T> {
         let (_, body, _) =
             crate::cache::read_entry_file(self.artifact_path()?, desal_io::artifact::read_artifact::<T>)?;
-        Ok(self.body.get_or_init(|| body))
+        Ok(body)
+    }
+
+    /// The body held in memory (a computed stage's), taken out when the cache entry can
+    /// give it again: a later [`Self::body`] decodes it from there. `None` when no body
+    /// is held or the stage has no entry (computed in [`Memory`], it keeps its body).
+    pub fn take_held_body(&mut self) -> Option<T> {
+        self.entry.as_ref()?;
+        self.body.take()
     }
 
     /// The body, summary and note, the body decoded if it was not yet.

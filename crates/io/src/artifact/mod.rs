@@ -221,24 +221,49 @@ pub fn encode_artifact<T: ArtifactBody>(producer: &Producer, body: &T) -> (Vec<u
     let payload = codec::encode(&(producer, body));
     let hash = ContentHash::of(&payload);
     let mut bytes = Vec::with_capacity(HEADER_LEN + payload.len());
-    bytes.extend_from_slice(&MAGIC);
-    bytes.extend_from_slice(&(T::KIND as u16).to_le_bytes());
-    bytes.extend_from_slice(&T::KIND.current_version().to_le_bytes());
-    bytes.extend_from_slice(&[0u8; 4]);
-    bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-    bytes.extend_from_slice(&hash.0);
+    bytes.extend_from_slice(&header::<T>(payload.len(), &hash));
     bytes.extend_from_slice(&payload);
     (bytes, hash)
 }
 
-/// Writes an artifact atomically; returns its content hash.
+/// The header of an artifact of kind `T` whose payload has `payload_len` bytes and
+/// content `hash`.
+fn header<T: ArtifactBody>(payload_len: usize, hash: &ContentHash) -> [u8; HEADER_LEN] {
+    let mut header = [0u8; HEADER_LEN];
+    header[..MAGIC.len()].copy_from_slice(&MAGIC);
+    header[8..10].copy_from_slice(&(T::KIND as u16).to_le_bytes());
+    header[10..12].copy_from_slice(&T::KIND.current_version().to_le_bytes());
+    // Bytes 12..16 are reserved and stay zero.
+    header[16..24].copy_from_slice(&(payload_len as u64).to_le_bytes());
+    header[24..56].copy_from_slice(&hash.0);
+    header
+}
+
+/// Writes an artifact atomically; returns its content hash: [`encode_artifact`]'s bytes,
+/// without ever holding them. The payload is encoded twice, first into its hash (the
+/// header, written first, holds its length and checksum), then into the file: a pose
+/// set's payload is hundreds of megabytes, and encoding it again costs less than
+/// keeping it. Encoding is deterministic, so both passes see the same bytes.
 pub fn write_artifact<T: ArtifactBody>(
     path: &Path,
     producer: &Producer,
     body: &T,
 ) -> Result<ContentHash, IoError> {
-    let (bytes, hash) = encode_artifact(producer, body);
-    crate::atomic::write_atomic(path, &bytes)?;
+    use std::io::{BufWriter, Write as _};
+    let mut hasher = blake3::Hasher::new();
+    let payload_len = {
+        // Bincode writes field by field; the hasher is fastest fed whole blocks.
+        let mut sink = BufWriter::with_capacity(1 << 16, &mut hasher);
+        let len = codec::encode_into(&(producer, body), &mut sink).map_err(|e| IoError::io(path, e))?;
+        sink.flush().map_err(|e| IoError::io(path, e))?;
+        len
+    };
+    let hash = ContentHash(*hasher.finalize().as_bytes());
+    crate::atomic::write_atomic_with(path, |w| {
+        w.write_all(&header::<T>(payload_len, &hash))?;
+        codec::encode_into(&(producer, body), w)?;
+        Ok(())
+    })?;
     Ok(hash)
 }
 

@@ -7,7 +7,7 @@
 //! `tests/fixtures/` and a test that it still loads or is refused clearly.
 
 use desal_mesh::math::{vec3_from_f32, vec3_to_f32};
-use desal_mesh::{MeshError, PartLabels, PoseSet};
+use desal_mesh::{MeshError, PartLabels, PoseSet, Vec3};
 use serde::{Deserialize, Serialize};
 
 use super::{ArtifactBody, ArtifactKind, Producer};
@@ -73,17 +73,47 @@ impl PoseSetV2 {
             names: set.names.clone(),
             template: set.template as u32,
             faces: set.faces.clone(),
-            positions: set.poses.iter().map(|p| p.iter().map(vec3_to_f32).collect()).collect(),
+            positions: set.poses.iter().map(|p| positions_to_f32(p)).collect(),
             groups: set.groups.clone().unwrap_or_default(),
         }
     }
 
+    /// [`Self::from_pose_set`], consuming the set pose by pose: each pose's f64 array is
+    /// freed as its f32 one is made, so a large set is never held at both precisions.
+    pub fn from_owned_pose_set(set: PoseSet) -> Self {
+        let PoseSet { names, poses, faces, template, groups } = set;
+        PoseSetV2 {
+            names,
+            template: template as u32,
+            faces,
+            positions: poses.into_iter().map(|p| positions_to_f32(&p)).collect(),
+            groups: groups.unwrap_or_default(),
+        }
+    }
+
     pub fn to_pose_set(&self) -> Result<PoseSet, MeshError> {
-        let poses = self.positions.iter().map(|p| p.iter().map(|&q| vec3_from_f32(q)).collect()).collect();
+        let poses = self.positions.iter().map(|p| positions_from_f32(p)).collect();
         let groups = (!self.groups.is_empty()).then(|| self.groups.clone());
         PoseSet::try_new(self.names.clone(), poses, self.faces.clone(), self.template as usize)?
             .with_groups(groups)
     }
+
+    /// [`Self::to_pose_set`], consuming the body pose by pose: each pose's f32 array is
+    /// freed as its f64 one is made, so a large set is never held at both precisions.
+    pub fn into_pose_set(self) -> Result<PoseSet, MeshError> {
+        let PoseSetV2 { names, template, faces, positions, groups } = self;
+        let poses = positions.into_iter().map(|p| positions_from_f32(&p)).collect();
+        let groups = (!groups.is_empty()).then_some(groups);
+        PoseSet::try_new(names, poses, faces, template as usize)?.with_groups(groups)
+    }
+}
+
+fn positions_to_f32(pose: &[Vec3]) -> Vec<[f32; 3]> {
+    pose.iter().map(vec3_to_f32).collect()
+}
+
+fn positions_from_f32(pose: &[[f32; 3]]) -> Vec<Vec3> {
+    pose.iter().map(|&q| vec3_from_f32(q)).collect()
 }
 
 /// Part labels validated against a pose set.
