@@ -189,11 +189,22 @@ pub fn compute(
 }
 
 pub fn apply(map: &MapV1, set: &PoseSet, labels: &PartLabels) -> Result<(PoseSet, PartLabels)> {
+    Ok(desal_map::apply_map(set, labels, &map.faces, &vertex_map(map, set)?)?)
+}
+
+/// The simplified vertices' labels, as [`apply`] gives them, without the simplified
+/// poses.
+pub fn labels(map: &MapV1, set: &PoseSet, labels: &PartLabels) -> Result<PartLabels> {
+    Ok(desal_map::map_labels(set, labels, &map.faces, &vertex_map(map, set)?)?)
+}
+
+/// A map artifact's map onto `set`, checked against its own triangles.
+fn vertex_map(map: &MapV1, set: &PoseSet) -> Result<VertexMap> {
     let vertex_map = VertexMap::try_new(map.simp_to_orig.clone(), set.vertex_count())?;
     if map.faces.iter().flatten().any(|&i| i as usize >= vertex_map.len()) {
         bail!("the map's triangles reference vertices beyond its {} entries", vertex_map.len());
     }
-    Ok(desal_map::apply_map(set, labels, &map.faces, &vertex_map)?)
+    Ok(vertex_map)
 }
 
 /// `desal inspect` lines for a map artifact.

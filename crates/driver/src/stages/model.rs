@@ -14,7 +14,9 @@
 //! a model vertex and the output folder can hold the smaller model itself:
 //! [`simplified_model`] writes `model.npz` (`desal_bodymodel::subset_model`, in the
 //! input's keys and dtypes; a `.pkl` input comes out as an npz of the same keys) and
-//! `model.json`, what the joint regressor's solve and the landmarks did.
+//! `model.json`, what the joint regressor's solve and the landmarks did. The samples
+//! simplified (`simplified/<pose>.ply`, one file per sample) are written only when
+//! `write_poses = true` asks for them.
 
 use std::path::{Path, PathBuf};
 
@@ -71,6 +73,12 @@ pub struct ModelParams {
     /// The labels: dominant skinning joints merged to about this many parts. Default 16.
     #[serde(default = "default_parts")]
     pub parts: usize,
+    /// Also write every sample simplified, `simplified/<pose>.ply` (one file per sample,
+    /// thousands for a large sampling). Default false: the output is the simplified
+    /// model (`model.npz`), which makes any sample again. It shapes the output folder
+    /// only, so no stage's key holds it; the folder's `outputs_key` does when it is set.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub write_poses: bool,
 }
 
 fn default_count() -> usize {
@@ -263,15 +271,18 @@ pub struct SimplifiedModelSummary {
     pub subset: SubsetReport,
 }
 
-/// The model file a model dataset's outputs are made from.
+/// The model file a model dataset's outputs are made from, and whether they include
+/// every sample simplified.
 #[derive(Debug, Clone)]
 pub struct ModelSource {
     pub file: PathBuf,
+    /// [`ModelParams::write_poses`].
+    pub write_poses: bool,
 }
 
 impl ModelInput<'_> {
     pub fn to_owned(&self) -> ModelSource {
-        ModelSource { file: self.file.to_owned() }
+        ModelSource { file: self.file.to_owned(), write_poses: self.params.write_poses }
     }
 }
 
