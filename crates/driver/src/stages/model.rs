@@ -42,8 +42,8 @@ pub const MODEL_STAGE_VERSION: u32 = 1;
 
 /// The most positions (samples × vertices) a model source makes: the rig's cap
 /// ([`desal_rig::MAX_POSE_VERTICES`], 2^25). A model source's `desal run` with a
-/// two-level hierarchy peaks near 39 bytes a position (the 2048-sample benchmark, 27.4 M
-/// positions: 1.08 GB; BENCHMARKS.md "Issue 41, item 4"), so about 1.3 GB at the cap.
+/// two-level hierarchy peaks near 36 bytes a position (the 2048-sample benchmark, 27.4 M
+/// positions: 0.98 GB; BENCHMARKS.md "Issue 41, item 4"), so about 1.2 GB at the cap.
 pub const MAX_POSITIONS: usize = desal_rig::MAX_POSE_VERTICES;
 
 /// `[dataset.model]`.
