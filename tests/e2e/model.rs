@@ -50,14 +50,6 @@ fn a_body_model_is_sampled_and_simplified_with_a_hierarchy() {
     );
     assert_eq!(first["input"]["poses"], 7, "the template and 2 shapes × 3 poses");
     let body = dir.path().join("out/body");
-    let mut poses: Vec<String> = std::fs::read_dir(body.join("simplified"))
-        .unwrap()
-        .map(|e| e.unwrap().file_name().into_string().unwrap())
-        .filter(|n| n.ends_with(".ply"))
-        .collect();
-    poses.sort();
-    assert_eq!(poses[0], "s000-p000.ply");
-    assert!(poses.contains(&"s001-p002.ply".to_owned()) && poses.contains(&"template.ply".to_owned()));
     let labels = std::fs::read_to_string(body.join("labels.json")).unwrap();
     assert!(labels.contains("left_elbow") && labels.contains("pelvis"), "{labels}");
     assert!(body.join("hierarchy.npz").is_file());
@@ -89,6 +81,48 @@ fn a_body_model_is_sampled_and_simplified_with_a_hierarchy() {
         .flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs()))
         .fold(0.0f32, f32::max);
     assert!(worst < 1e-5, "npz and pkl samples differ by {worst} m");
+}
+
+/// The simplified samples in `simplified/`, sorted.
+fn simplified_plys(body: &Path) -> Vec<String> {
+    let mut poses: Vec<String> = std::fs::read_dir(body.join("simplified"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|n| n.ends_with(".ply"))
+        .collect();
+    poses.sort();
+    poses
+}
+
+/// Issue 41, item 4: a model source writes no per-sample PLY unless `write_poses = true`
+/// asks; the map's files are written either way, and asking recomputes no stage (the
+/// setting is in no stage key) but rewrites the folder (it is in `outputs_key`).
+#[test]
+fn a_model_source_writes_its_samples_only_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipeline = write_model_dataset(dir.path(), "model.npz", "");
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let body = dir.path().join("out/body");
+    assert_eq!(simplified_plys(&body), Vec::<String>::new(), "no sample PLY by default");
+    assert!(body.join("simplified/parts.txt").is_file() && body.join("vertex_map.txt").is_file());
+    let first = report(dir.path());
+
+    let text =
+        std::fs::read_to_string(&pipeline).unwrap().replace("seed = 7\n", "seed = 7\nwrite_poses = true\n");
+    std::fs::write(&pipeline, text).unwrap();
+    let out = desal(&["run", pipeline.to_str().unwrap(), "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let second = report(dir.path());
+    assert!(ran(&second).is_empty(), "write_poses is in no stage key");
+    assert_ne!(first["outputs_key"], second["outputs_key"], "but in the folder's");
+    let poses = simplified_plys(&body);
+    assert_eq!(poses.len(), 7, "the template and 2 shapes × 3 poses: {poses:?}");
+    assert_eq!(poses[0], "s000-p000.ply");
+    assert!(poses.contains(&"s001-p002.ply".to_owned()) && poses.contains(&"template.ply".to_owned()));
+    let template = desal_io::read_mesh(&body.join("simplified/template.ply")).unwrap();
+    let raw = desal_io::read_mesh(&body.join("simplified-template-raw.ply")).unwrap();
+    assert_eq!(template.faces, raw.faces, "subset placement: the mapped template is stage 3's");
 }
 
 /// A model table beside pose files, an empty sample count and a missing file are refused
@@ -163,7 +197,7 @@ fn a_model_dataset_leaves_the_simplified_model() {
         .lines()
         .map(|l| l.parse().unwrap())
         .collect();
-    let simplified = desal_io::read_mesh(&body.join("simplified/template.ply")).unwrap();
+    let simplified = desal_io::read_mesh(&body.join("simplified-template-raw.ply")).unwrap();
     assert_eq!(
         (small.kind, small.vertex_count(), small.faces.len()),
         (full.kind, kept.len(), simplified.faces.len())

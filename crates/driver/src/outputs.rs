@@ -9,7 +9,7 @@
 //! | `saliency.png`, `saliency.ply` | the saliency drawn on the template |
 //! | `labels.txt`, `parts.png`, `parts.json` | with `labels = "auto"`: the discovered parts (text, drawn on the template, the discovery's figures) |
 //! | `simplified-template-raw.ply` | stage 3's template before mapping |
-//! | `simplified/<pose>.ply`, `simplified/parts.txt`, `vertex_map.txt` | the registered simplified pose set |
+//! | `simplified/<pose>.ply`, `simplified/parts.txt`, `vertex_map.txt` | the registered simplified pose set; a `[dataset.model]` writes the PLYs only with `write_poses = true` |
 //! | `hierarchy-<k>.dsa`, `hierarchy.npz`, `hierarchy.json` | with `[dataset.hierarchy]`: each level's cache entry, the npz of every level (`stages::hierarchy::npz_arrays`), the levels' summaries |
 //! | `hierarchy.png`, `upsampling-error.png`, `upsampling-error-<k>.ply` | with `[dataset.hierarchy]`: the levels side by side; the held-out per-vertex upsampling error of each level, fitted against barycentric (RMS, drawn and as PLY properties) |
 //! | `simplified.glb` (`.vrm` for a `.vrm`), `simplified-rig.json`, the images it names by URI | with `[dataset.rig]`: the simplified rig, the input document edited (`stages::rig::simplified_glb`), its figures, and its external images under their relative paths |
@@ -38,8 +38,9 @@ use crate::stages::{Counts, DatasetStages};
 /// edited (every mesh, material, texture and extension kept; `simplified.vrm` for a
 /// `.vrm`), its external images beside it. 5: `view.html` takes a list of levels, shows
 /// the input file's own `.glb` with its materials and textures, frames the whole body,
-/// has morph-target sliders.
-pub const OUTPUTS_VERSION: u32 = 5;
+/// has morph-target sliders. 6: a model dataset writes `simplified/<pose>.ply` only with
+/// `write_poses = true`.
+pub const OUTPUTS_VERSION: u32 = 6;
 
 /// `desal eval`'s folder inside a dataset's output folder: kept when `desal run` replaces
 /// the rest (it depends on the pipeline's inputs, not on the run's stage parameters).
@@ -120,7 +121,8 @@ pub fn publish(
     force: bool,
     start: std::time::Instant,
 ) -> Result<()> {
-    report.outputs_key = outputs_key(&report.stages, up_axis);
+    report.outputs_key =
+        outputs_key(&report.stages, up_axis, stages.model.as_ref().is_some_and(|m| m.write_poses));
     // When a stage ran (a corrupt entry recomputed, say), the folder is rewritten
     // regardless.
     if !force
@@ -149,7 +151,14 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
         Some(model) => simplified_model_files(model, map)?,
         None => Vec::new(),
     };
-    let (simple_set, simple_labels) = crate::stages::map::apply(map, set, part_labels)?;
+    // A model source's samples (thousands) are simplified only when asked for.
+    let write_poses = stages.model.as_ref().is_none_or(|m| m.write_poses);
+    let simplified_files = if write_poses {
+        let (simple_set, simple_labels) = crate::stages::map::apply(map, set, part_labels)?;
+        simplified_pose_set("simplified/", map, simple_set, simple_labels)
+    } else {
+        simplified_map_files("simplified/", map, crate::stages::map::labels(map, set, part_labels)?)
+    };
     let mut outputs = DatasetOutputs { artifacts: Vec::new(), files: Vec::new() };
     add_saliency_pictures(
         &mut outputs,
@@ -162,7 +171,7 @@ pub fn dataset_outputs(stages: &DatasetStages, up_axis: Option<&str>) -> Result<
         "simplified-template-raw.ply".into(),
         Box::new(move |p| Ok(desal_io::ply::write_ply(p, &raw, &desal_io::ply::PlyWriteOptions::default())?)),
     ));
-    outputs.files.extend(simplified_pose_set("simplified/", map, simple_set, simple_labels));
+    outputs.files.extend(simplified_files);
     add_artifact(&mut outputs, "poses", &stages.poses)?;
     add_artifact(&mut outputs, "labels", &stages.labels)?;
     if let Some(parts) = &stages.parts {
@@ -370,13 +379,7 @@ pub fn simplified_pose_set(
     labels: PartLabels,
 ) -> Vec<(String, FileWriter)> {
     use desal_io::ply::{PlyWriteOptions, write_ply};
-    let mut files: Vec<(String, FileWriter)> = Vec::new();
-    let text: String = map.simp_to_orig.iter().map(|i| format!("{i}\n")).collect();
-    files.push(("vertex_map.txt".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, text.as_bytes())?))));
-    files.push((
-        format!("{poses_dir}parts.txt"),
-        Box::new(move |p| Ok(desal_io::labels::write_labels_txt(p, &labels)?)),
-    ));
+    let mut files = simplified_map_files(poses_dir, map, labels);
     // Pose names come from files (a rig's animation names): one rule makes each a file
     // name inside `poses_dir`, ordinary names unchanged.
     let stems = desal_io::confine::file_stems_for(&set.names);
@@ -388,6 +391,20 @@ pub fn simplified_pose_set(
             Box::new(move |p| Ok(write_ply(p, &set.pose_mesh(pose), &PlyWriteOptions::default())?)),
         ));
     }
+    files
+}
+
+/// The simplified pose set's files but its poses: `vertex_map.txt` and
+/// `<poses_dir>parts.txt` (the labels of the simplified vertices), what a model source
+/// writes without `write_poses`.
+fn simplified_map_files(poses_dir: &str, map: &MapV1, labels: PartLabels) -> Vec<(String, FileWriter)> {
+    let mut files: Vec<(String, FileWriter)> = Vec::new();
+    let text: String = map.simp_to_orig.iter().map(|i| format!("{i}\n")).collect();
+    files.push(("vertex_map.txt".into(), Box::new(move |p| Ok(desal_io::write_atomic(p, text.as_bytes())?))));
+    files.push((
+        format!("{poses_dir}parts.txt"),
+        Box::new(move |p| Ok(desal_io::labels::write_labels_txt(p, &labels)?)),
+    ));
     files
 }
 
@@ -440,18 +457,23 @@ pub fn write_all_or_nothing(files: Vec<(PathBuf, FileWriter)>) -> Result<()> {
 }
 
 /// Identifies a dataset's output folder content: every stage's cache key, plus what the
-/// derived files depend on beyond them (the picture's up axis, the desal version, and
-/// whether `view.html` loads three.js from its CDN or inlines `DESAL_THREE`'s).
-pub fn outputs_key(records: &[StageRecord], up_axis: Option<&str>) -> String {
+/// derived files depend on beyond them (the picture's up axis, the desal version,
+/// whether `view.html` loads three.js from its CDN or inlines `DESAL_THREE`'s, and a
+/// model source's `write_poses`, given as `model_poses`: left out when unset, as a
+/// stage key leaves out a setting that is not given).
+pub fn outputs_key(records: &[StageRecord], up_axis: Option<&str>, model_poses: bool) -> String {
     let keys: Vec<&str> = records.iter().map(|r| r.cache_key.as_str()).collect();
-    let text = canonical_json(&serde_json::json!({
+    let mut key = serde_json::json!({
         "stages": keys,
         "up_axis": up_axis,
         "desal": env!("CARGO_PKG_VERSION"),
         "outputs": OUTPUTS_VERSION,
         "three": desal_rig::viewer::three_key(desal_rig::viewer::three_dir_from_env().as_deref()),
-    }));
-    ContentHash::of(text.as_bytes()).to_hex()
+    });
+    if model_poses {
+        key["model_poses"] = serde_json::Value::Bool(true);
+    }
+    ContentHash::of(canonical_json(&key).as_bytes()).to_hex()
 }
 
 /// The output folder's file list when its report.json carries `outputs_key` and every

@@ -2,7 +2,7 @@
 //! (its positions at the mapped original vertices, with the simplified triangles), the
 //! part labels come along, and the mapping displacement is measured.
 
-use desal_mesh::{Face, PartLabels, PoseSet, Vec3};
+use desal_mesh::{Face, MeshError, PartLabels, PoseSet, Vec3};
 use rayon::prelude::*;
 
 use crate::error::MapError;
@@ -30,14 +30,40 @@ pub fn apply_map(
     simp_faces: &[Face],
     map: &VertexMap,
 ) -> Result<(PoseSet, PartLabels), MapError> {
+    let simplified_labels = map_labels(poses, labels, simp_faces, map)?;
+    Ok((gather_poses(poses, simp_faces, map)?, simplified_labels))
+}
+
+/// The poses half of [`apply_map`], its inputs already checked by [`map_labels`].
+pub(crate) fn gather_poses(
+    poses: &PoseSet,
+    simp_faces: &[Face],
+    map: &VertexMap,
+) -> Result<PoseSet, MapError> {
+    // One gather per pose; poses are independent, collected in pose order.
+    let simplified_poses: Vec<Vec<Vec3>> = poses.poses.par_iter().map(|pose| gather(pose, map)).collect();
+    Ok(PoseSet::try_new(poses.names.clone(), simplified_poses, simp_faces.to_vec(), poses.template)?)
+}
+
+/// The labels half of [`apply_map`], without gathering a single pose but the template:
+/// `labels` carried to the simplified vertices, exactly as [`apply_map`] returns them, for
+/// a caller that needs the map's labels and not the simplified poses (a model source's
+/// thousands of poses are hundreds of MB simplified).
+///
+/// Errors: those of [`apply_map`].
+pub fn map_labels(
+    poses: &PoseSet,
+    labels: &PartLabels,
+    simp_faces: &[Face],
+    map: &VertexMap,
+) -> Result<PartLabels, MapError> {
     map.validate(poses.vertex_count())?;
     labels.check_vertex_count(poses.vertex_count())?;
     check_face_indices(simp_faces, map.len())?;
-
-    // One gather per pose; poses are independent, collected in pose order.
-    let simplified_poses: Vec<Vec<Vec3>> = poses.poses.par_iter().map(|pose| gather(pose, map)).collect();
-    let simplified =
-        PoseSet::try_new(poses.names.clone(), simplified_poses, simp_faces.to_vec(), poses.template)?;
+    // What the simplified pose set refuses (`PoseSet::try_new`), refused without it.
+    if map.is_empty() || simp_faces.is_empty() {
+        return Err(MeshError::Empty { vertices: map.len(), faces: simp_faces.len() }.into());
+    }
     let carried = PartLabels {
         labels: map.simp_to_orig.iter().map(|&orig_idx| labels.labels[orig_idx as usize]).collect(),
         names: labels.names.clone(),
@@ -45,8 +71,9 @@ pub fn apply_map(
     };
     // Labels with a part tree (a rig's joints) hand a part the simplification left
     // unfittable to its parent; labels without one are carried as they are.
-    let (simplified_labels, _merged) = carried.merge_unfittable_parts(simplified.template_positions());
-    Ok((simplified, simplified_labels))
+    let (simplified_labels, _merged) =
+        carried.merge_unfittable_parts(&gather(poses.template_positions(), map));
+    Ok(simplified_labels)
 }
 
 /// How far the mapping moved the simplified template's vertices, in the pose set's

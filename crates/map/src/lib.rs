@@ -16,7 +16,8 @@
 //! triangles and the carried part labels, so all simplified poses are registered the same
 //! way (in greedy mode the simplified template itself is replaced by the mapped original
 //! template vertices; [`MapReport::displacement`] says how far that moved them).
-//! [`map_pose_set`] runs the whole stage.
+//! [`map_pose_set`] runs the whole stage; [`map_template`] runs it up to the simplified
+//! poses, for a caller that needs only the map, the carried labels and the report.
 //!
 //! **Invariant:** no file format, path or progress bar here; input is data, output is
 //! data plus a [`MapReport`].
@@ -32,7 +33,7 @@ use std::time::Instant;
 
 use desal_mesh::{PartLabels, PoseSet, TriMesh};
 
-pub use apply::{Displacement, apply_map, displacement, empty_parts};
+pub use apply::{Displacement, apply_map, displacement, empty_parts, map_labels};
 pub use error::MapError;
 pub use greedy::{greedy_map, greedy_map_brute_force, greedy_map_with, squared_distance};
 pub use vertex_map::VertexMap;
@@ -140,6 +141,18 @@ impl fmt::Display for MapReport {
     }
 }
 
+/// Stage 4 without the simplified poses ([`map_template`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MappedTemplate {
+    /// `simp_to_orig`, one entry per simplified vertex.
+    pub map: VertexMap,
+    /// Part labels in `simp_idx` space, as [`MapOutput::labels`].
+    pub labels: PartLabels,
+    /// As [`map_pose_set`]'s, but `apply_seconds` is the time of carrying the labels
+    /// only (no pose is gathered).
+    pub report: MapReport,
+}
+
 /// Runs stage 4: builds the map from `simplified` (the simplified template, `simp_idx`
 /// space) to the template of `poses` (`orig_idx` space) as `mode` says, measures the
 /// displacement, and applies the map to every pose and to `labels`.
@@ -153,8 +166,54 @@ pub fn map_pose_set(
     poses: &PoseSet,
     labels: &PartLabels,
 ) -> Result<MapOutput, MapError> {
-    let template = poses.template_positions();
+    let MappedTemplate { map, labels, mut report } = map_template(config, mode, simplified, poses, labels)?;
+    let apply_started = Instant::now();
+    let simplified_poses = apply::gather_poses(poses, &simplified.faces, &map)?;
+    report.apply_seconds += apply_started.elapsed().as_secs_f64();
+    Ok(MapOutput { map, poses: simplified_poses, labels, report })
+}
 
+/// [`map_pose_set`] without gathering the simplified poses: the same map, labels and
+/// report (but `apply_seconds`, see [`MappedTemplate::report`]), for a caller that
+/// applies the map later, if at all ([`apply_map`]).
+///
+/// Errors: those of [`map_pose_set`].
+pub fn map_template(
+    config: &MapConfig,
+    mode: MapMode<'_>,
+    simplified: &TriMesh,
+    poses: &PoseSet,
+    labels: &PartLabels,
+) -> Result<MappedTemplate, MapError> {
+    let (map, map_seconds) = build_map(config, mode, simplified, poses.template_positions())?;
+    let displacement = displacement(&simplified.positions, poses.template_positions(), &map)?;
+
+    let apply_started = Instant::now();
+    let simplified_labels = map_labels(poses, labels, &simplified.faces, &map)?;
+    let apply_seconds = apply_started.elapsed().as_secs_f64();
+
+    let report = MapReport {
+        mode: mode.name(),
+        original_vertices: poses.vertex_count(),
+        simplified_vertices: map.len(),
+        simplified_faces: simplified.faces.len(),
+        poses: poses.pose_count(),
+        displacement,
+        empty_parts: empty_parts(&simplified_labels),
+        map_seconds,
+        apply_seconds,
+    };
+    Ok(MappedTemplate { map, labels: simplified_labels, report })
+}
+
+/// The map of `mode` from the simplified template onto `template`, and the seconds it
+/// took.
+fn build_map(
+    config: &MapConfig,
+    mode: MapMode<'_>,
+    simplified: &TriMesh,
+    template: &[desal_mesh::Vec3],
+) -> Result<(VertexMap, f64), MapError> {
     let map_started = Instant::now();
     let map = match mode {
         MapMode::Greedy => greedy_map_with(config, &simplified.positions, template)?,
@@ -168,24 +227,5 @@ pub fn map_pose_set(
             VertexMap::from_subset(kept_orig, template.len())?
         }
     };
-    let map_seconds = map_started.elapsed().as_secs_f64();
-
-    let displacement = displacement(&simplified.positions, template, &map)?;
-
-    let apply_started = Instant::now();
-    let (simplified_poses, simplified_labels) = apply_map(poses, labels, &simplified.faces, &map)?;
-    let apply_seconds = apply_started.elapsed().as_secs_f64();
-
-    let report = MapReport {
-        mode: mode.name(),
-        original_vertices: template.len(),
-        simplified_vertices: map.len(),
-        simplified_faces: simplified.faces.len(),
-        poses: simplified_poses.pose_count(),
-        displacement,
-        empty_parts: empty_parts(&simplified_labels),
-        map_seconds,
-        apply_seconds,
-    };
-    Ok(MapOutput { map, poses: simplified_poses, labels: simplified_labels, report })
+    Ok((map, map_started.elapsed().as_secs_f64()))
 }

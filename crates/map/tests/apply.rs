@@ -216,3 +216,37 @@ fn bad_inputs_are_refused_with_their_indices() {
         MapError::MapLengthMismatch { positions: 4, map: 3 }
     );
 }
+
+/// `map_template` is `map_pose_set` without the simplified poses: the same map, labels
+/// and report but for the apply time, in both modes (greedy from a perturbed template),
+/// and the same error for an empty triangle list.
+#[test]
+fn map_template_is_map_pose_set_without_the_poses() {
+    use desal_map::map_template;
+    let mut rng = ChaCha8Rng::seed_from_u64(12);
+    let (poses, labels) = grid_pose_set(&mut rng, 5);
+    let (kept, faces) = subset_simplification(&mut rng, poses.vertex_count() as u32);
+    let simplified = TriMesh {
+        positions: kept
+            .iter()
+            .map(|&o| poses.template_positions()[o as usize] + Vec3::new(0.01, 0.0, 0.0))
+            .collect(),
+        faces,
+    };
+    for mode in [MapMode::Subset { kept_orig: &kept }, MapMode::Greedy] {
+        let config = MapConfig::default();
+        let full = map_pose_set(&config, mode, &simplified, &poses, &labels).unwrap();
+        let mut only = map_template(&config, mode, &simplified, &poses, &labels).unwrap();
+        assert_eq!(only.map, full.map, "{}", mode.name());
+        assert_eq!(only.labels, full.labels);
+        only.report.map_seconds = full.report.map_seconds;
+        only.report.apply_seconds = full.report.apply_seconds;
+        assert_eq!(only.report, full.report);
+    }
+    let no_faces = TriMesh { faces: Vec::new(), ..simplified };
+    let mode = MapMode::Subset { kept_orig: &kept };
+    assert_eq!(
+        map_template(&MapConfig::default(), mode, &no_faces, &poses, &labels).unwrap_err(),
+        map_pose_set(&MapConfig::default(), mode, &no_faces, &poses, &labels).unwrap_err(),
+    );
+}

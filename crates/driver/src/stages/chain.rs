@@ -1,7 +1,8 @@
 //! Stages 1–4 written once: fit → saliency → simplify → map of one pose set, over a
 //! [`Store`]. `desal run` chains them over the cache (`run_stages`), the Python package
-//! and the single-stage commands over memory (`memory.rs`), and every hierarchy level
-//! over memory inside its own cached stage (`hierarchy::compute_level`).
+//! and the single-stage commands over memory (`memory.rs`), and every hierarchy or LOD
+//! level over scratch memory inside its own cached stage (`hierarchy::compute_level`,
+//! `lods.rs`).
 //!
 //! Stages 1 and 2 always run, also where stage 3 reads no weights (desal's own methods,
 //! `multipose`, a cost without saliency): `fit.dsa` and `saliency.png` are outputs of a
@@ -97,8 +98,9 @@ pub fn chain(
         || saliency::compute(settings.saliency, fitted.body()?, set()?.template_mesh().diagonal()),
     )?;
     // The residuals (one per pose and vertex) are read by stage 2 only: a computed fit's
-    // go back now when its cache entry holds them.
-    drop(fitted.take_held_body());
+    // go back now when its cache entry holds them, or when the store's caller does not
+    // read them (`Scratch`).
+    store.release(&mut fitted);
 
     // Stage 3: the template simplified by the configured method, keeping the seams it
     // is handed as polylines (keyed by their content); a rig's meshes by their plan.

@@ -32,7 +32,7 @@ use serde_json::json;
 
 use crate::cache::{StageKey, canonical_json};
 use crate::stages::chain::{ChainInput, ChainSettings, chain};
-use crate::stages::runner::{Memory, Stage, StageOutput, Staged, Store};
+use crate::stages::runner::{Scratch, Stage, StageOutput, Staged, Store};
 use crate::stages::saliency::SaliencyParams;
 use crate::stages::simplify::{Method, SimplifyParams};
 
@@ -437,8 +437,8 @@ fn build_coarse_level(
     let upsampler = settings.hierarchy.config()?;
     let (fine, fine_labels) = level_pose_set(full, labels, parent)?;
 
-    // Stages 1–4 on this level's pose set, as on level 0, in memory: the level is one
-    // cached stage.
+    // Stages 1–4 on this level's pose set, as on level 0, in memory (`Scratch`: stage
+    // 1's residuals go once stage 2 has them): the level is one cached stage.
     let params = settings.simplify_params(step);
     let input = ChainInput {
         set: &|| Ok(&fine),
@@ -447,7 +447,8 @@ fn build_coarse_level(
         seams: None,
         meshes: None,
     };
-    let stages = chain(&mut Memory, ChainSettings { simplify: &params, ..settings.chain }, &input, progress)?;
+    let stages =
+        chain(&mut Scratch, ChainSettings { simplify: &params, ..settings.chain }, &input, progress)?;
     let coarse_to_fine = stages.map.body()?.simp_to_orig.clone();
     let faces = stages.simplified.body()?.faces.clone();
     // Only the map is read on: stage 1's residuals go back before U's fit.

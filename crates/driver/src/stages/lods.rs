@@ -24,7 +24,7 @@ use crate::cache::{StageKey, canonical_json};
 use crate::stages::chain::{ChainInput, ChainSettings, chain};
 use crate::stages::meshes::MeshPlan;
 pub use crate::stages::rig::{LodSummary, check_fractions};
-use crate::stages::runner::{Memory, Stage, StageOutput, Staged, Store};
+use crate::stages::runner::{Scratch, Stage, StageOutput, Staged, Store};
 use crate::stages::seams::{SeamEdges, nested_seam_edges};
 use crate::stages::simplify::SimplifyParams;
 
@@ -169,7 +169,7 @@ fn compute_level(
         meshes: fine_plan.as_ref(),
     };
     let stages =
-        chain(&mut Memory, ChainSettings { simplify: &params, ..settings.chain }, &chain_input, progress)?;
+        chain(&mut Scratch, ChainSettings { simplify: &params, ..settings.chain }, &chain_input, progress)?;
     let simplified = stages.simplified.body()?;
     let map = stages.map.body()?;
     let simp_to_orig = desal_hierarchy::nest(&fine_to_orig, &map.simp_to_orig);

@@ -3,13 +3,14 @@
 
 use anyhow::{Result, bail};
 use desal_io::artifact::{ArtifactKind, ContentHash, MapV1, SimplifiedV1};
-use desal_map::{MapConfig, MapMode, MapOutput, VertexMap};
+use desal_map::{MapConfig, MapMode, MapOutput, MapReport, MappedTemplate, VertexMap};
 use desal_mesh::{PartLabels, PoseSet};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use crate::cache::{StageKey, canonical_json};
 use crate::stages::runner::StageOutput;
+use crate::stages::simplify::mesh;
 
 /// The cache key of a map of `simplified` onto `poses`.
 pub fn key(poses: ContentHash, simplified: ContentHash) -> StageKey {
@@ -64,23 +65,57 @@ fn check_made_from(simplified: &SimplifiedV1, set: &PoseSet) -> Result<()> {
     Ok(())
 }
 
-/// Maps the simplified template to original vertices: exactly, when every simplified
-/// vertex is an original one (subset placement); by the paper's greedy rule otherwise.
-/// Refuses a result of another pose set, or a mesh that does not lie on the template.
 /// Maps a stage-3 result (desal's or another tool's) onto `set` and applies the map to
 /// every pose: subset results by their own `simp_to_orig`, the rest by the paper's greedy
 /// rule. Refuses a result of another pose set, and a mesh that does not lie on this
 /// template.
 pub fn map(simplified: &SimplifiedV1, set: &PoseSet, labels: &PartLabels) -> Result<MapOutput> {
     check_made_from(simplified, set)?;
-    let mesh = super::simplify::mesh(simplified);
-    let kept: Option<Vec<u32>> = simplified.simp_to_orig.iter().copied().collect();
-    let mode = match &kept {
+    let kept = kept_orig(simplified);
+    let out = desal_map::map_pose_set(
+        &MapConfig::default(),
+        mode(kept.as_deref()),
+        &mesh(simplified),
+        set,
+        labels,
+    )?;
+    check_lies_on(&out.report, set)?;
+    Ok(out)
+}
+
+/// [`map`] without applying the map to the poses: the map, the carried labels and the
+/// report, which is all the stage keeps (the simplified poses are gathered by [`apply`]
+/// when an output needs them).
+fn map_template(simplified: &SimplifiedV1, set: &PoseSet, labels: &PartLabels) -> Result<MappedTemplate> {
+    check_made_from(simplified, set)?;
+    let kept = kept_orig(simplified);
+    let out = desal_map::map_template(
+        &MapConfig::default(),
+        mode(kept.as_deref()),
+        &mesh(simplified),
+        set,
+        labels,
+    )?;
+    check_lies_on(&out.report, set)?;
+    Ok(out)
+}
+
+/// The kept original vertices of a subset result, `None` when any vertex is new.
+fn kept_orig(simplified: &SimplifiedV1) -> Option<Vec<u32>> {
+    simplified.simp_to_orig.iter().copied().collect()
+}
+
+/// Subset mode when the result kept original vertices, greedy otherwise.
+fn mode(kept: Option<&[u32]>) -> MapMode<'_> {
+    match kept {
         Some(kept_orig) => MapMode::Subset { kept_orig },
         None => MapMode::Greedy,
-    };
-    let out = desal_map::map_pose_set(&MapConfig::default(), mode, &mesh, set, labels)?;
-    let r = &out.report;
+    }
+}
+
+/// Refuses a mapped mesh that does not lie on `set`'s template ([`MAX_MEAN_DISPLACEMENT`],
+/// [`MAX_DISPLACEMENT_EDGES`]).
+fn check_lies_on(r: &MapReport, set: &PoseSet) -> Result<()> {
     let diagonal =
         desal_mesh::math::bounding_box(set.template_positions()).map_or(0.0, |(lo, hi)| (hi - lo).norm());
     let (edge_length, _) = set.template_mesh().edge_length_stats();
@@ -97,7 +132,7 @@ pub fn map(simplified: &SimplifiedV1, set: &PoseSet, labels: &PartLabels) -> Res
             r.displacement.mean / edge_length
         );
     }
-    Ok(out)
+    Ok(())
 }
 
 /// `map.json`.
@@ -115,14 +150,14 @@ pub struct MapSummary {
     pub apply_seconds: f64,
 }
 
-/// Runs stage 4 ([`map`]) as a pipeline stage; warns about parts no simplified vertex
-/// carries.
+/// Runs stage 4 as a pipeline stage: [`map`] without the simplified poses (the stage
+/// keeps the map only); warns about parts no simplified vertex carries.
 pub fn compute(
     simplified: &SimplifiedV1,
     set: &PoseSet,
     labels: &PartLabels,
 ) -> Result<StageOutput<MapV1, MapSummary>> {
-    let out = map(simplified, set, labels)?;
+    let out = map_template(simplified, set, labels)?;
     let r = &out.report;
     if !r.empty_parts.is_empty() {
         let names: Vec<&str> = r.empty_parts.iter().map(|&p| labels.names[p as usize].as_str()).collect();
@@ -154,11 +189,22 @@ pub fn compute(
 }
 
 pub fn apply(map: &MapV1, set: &PoseSet, labels: &PartLabels) -> Result<(PoseSet, PartLabels)> {
+    Ok(desal_map::apply_map(set, labels, &map.faces, &vertex_map(map, set)?)?)
+}
+
+/// The simplified vertices' labels, as [`apply`] gives them, without the simplified
+/// poses.
+pub fn labels(map: &MapV1, set: &PoseSet, labels: &PartLabels) -> Result<PartLabels> {
+    Ok(desal_map::map_labels(set, labels, &map.faces, &vertex_map(map, set)?)?)
+}
+
+/// A map artifact's map onto `set`, checked against its own triangles.
+fn vertex_map(map: &MapV1, set: &PoseSet) -> Result<VertexMap> {
     let vertex_map = VertexMap::try_new(map.simp_to_orig.clone(), set.vertex_count())?;
     if map.faces.iter().flatten().any(|&i| i as usize >= vertex_map.len()) {
         bail!("the map's triangles reference vertices beyond its {} entries", vertex_map.len());
     }
-    Ok(desal_map::apply_map(set, labels, &map.faces, &vertex_map)?)
+    Ok(vertex_map)
 }
 
 /// `desal inspect` lines for a map artifact.

@@ -14,7 +14,9 @@
 //! a model vertex and the output folder can hold the smaller model itself:
 //! [`simplified_model`] writes `model.npz` (`desal_bodymodel::subset_model`, in the
 //! input's keys and dtypes; a `.pkl` input comes out as an npz of the same keys) and
-//! `model.json`, what the joint regressor's solve and the landmarks did.
+//! `model.json`, what the joint regressor's solve and the landmarks did. The samples
+//! simplified (`simplified/<pose>.ply`, one file per sample) are written only when
+//! `write_poses = true` asks for them.
 
 use std::path::{Path, PathBuf};
 
@@ -40,8 +42,8 @@ pub const MODEL_STAGE_VERSION: u32 = 1;
 
 /// The most positions (samples × vertices) a model source makes: the rig's cap
 /// ([`desal_rig::MAX_POSE_VERTICES`], 2^25). A model source's `desal run` with a
-/// two-level hierarchy peaks near 39 bytes a position (the 2048-sample benchmark, 27.4 M
-/// positions: 1.08 GB; BENCHMARKS.md "Issue 41, item 4"), so about 1.3 GB at the cap.
+/// two-level hierarchy peaks near 36 bytes a position (the 2048-sample benchmark, 27.4 M
+/// positions: 0.98 GB; BENCHMARKS.md "Issue 41, item 4"), so about 1.2 GB at the cap.
 pub const MAX_POSITIONS: usize = desal_rig::MAX_POSE_VERTICES;
 
 /// `[dataset.model]`.
@@ -71,6 +73,12 @@ pub struct ModelParams {
     /// The labels: dominant skinning joints merged to about this many parts. Default 16.
     #[serde(default = "default_parts")]
     pub parts: usize,
+    /// Also write every sample simplified, `simplified/<pose>.ply` (one file per sample,
+    /// thousands for a large sampling). Default false: the output is the simplified
+    /// model (`model.npz`), which makes any sample again. It shapes the output folder
+    /// only, so no stage's key holds it; the folder's `outputs_key` does when it is set.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub write_poses: bool,
 }
 
 fn default_count() -> usize {
@@ -263,15 +271,18 @@ pub struct SimplifiedModelSummary {
     pub subset: SubsetReport,
 }
 
-/// The model file a model dataset's outputs are made from.
+/// The model file a model dataset's outputs are made from, and whether they include
+/// every sample simplified.
 #[derive(Debug, Clone)]
 pub struct ModelSource {
     pub file: PathBuf,
+    /// [`ModelParams::write_poses`].
+    pub write_poses: bool,
 }
 
 impl ModelInput<'_> {
     pub fn to_owned(&self) -> ModelSource {
-        ModelSource { file: self.file.to_owned() }
+        ModelSource { file: self.file.to_owned(), write_poses: self.params.write_poses }
     }
 }
 

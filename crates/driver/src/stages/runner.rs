@@ -4,8 +4,11 @@
 //! - [`StageRunner`], the content-addressed cache (`desal run`): a hit yields the entry's
 //!   typed summary and a lazily decoded body; a miss (or `--force`/`--from`) computes the
 //!   stage, stores it and records why it missed, so the cache rules are written once;
-//! - [`Memory`], which computes every stage and keeps nothing (the Python package, the
-//!   single-stage commands, and the stages inside one hierarchy level).
+//! - [`Memory`], which computes every stage and keeps nothing but the outputs it hands
+//!   back (the Python package and the single-stage commands);
+//! - [`Scratch`], [`Memory`] that also lets go of a body no later stage reads (stage 1's
+//!   residuals once stage 2 has them): the stages inside one hierarchy or LOD level,
+//!   whose caller reads only their map.
 
 use std::cell::OnceCell;
 use std::path::{Path, PathBuf};
@@ -184,6 +187,14 @@ pub trait Store {
         hints: &[(String, String)],
         compute: impl FnOnce() -> Result<StageOutput<T, S>>,
     ) -> Result<Staged<T, S>>;
+
+    /// Lets go of `staged`'s body, which no later stage of the chain reads: the cache's
+    /// stages give it back (a later [`Staged::body`] decodes it from the entry), so do
+    /// [`Scratch`]'s (a later [`Staged::body`] is an error); [`Memory`] keeps it for its
+    /// caller.
+    fn release<T: ArtifactBody, S>(&self, staged: &mut Staged<T, S>) {
+        drop(staged.take_held_body());
+    }
 }
 
 /// The store that keeps nothing: every stage is computed, no key is built.
@@ -199,6 +210,28 @@ impl Store for Memory {
         compute: impl FnOnce() -> Result<StageOutput<T, S>>,
     ) -> Result<Staged<T, S>> {
         Ok(Staged::computed(compute()?))
+    }
+}
+
+/// [`Memory`] for a chain whose caller reads only its last stages (a hierarchy or LOD
+/// level reads the map): a body [`Store::release`]d is dropped, so stage 1's residuals
+/// (one vector per pose and vertex) are not held through stages 3 and 4.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Scratch;
+
+impl Store for Scratch {
+    fn stage<T: ArtifactBody, S: Serialize + DeserializeOwned>(
+        &mut self,
+        stage: Stage,
+        key: impl FnOnce() -> Result<StageKey>,
+        hints: &[(String, String)],
+        compute: impl FnOnce() -> Result<StageOutput<T, S>>,
+    ) -> Result<Staged<T, S>> {
+        Memory.stage(stage, key, hints, compute)
+    }
+
+    fn release<T: ArtifactBody, S>(&self, staged: &mut Staged<T, S>) {
+        drop(staged.body.take());
     }
 }
 
