@@ -77,16 +77,7 @@ pub fn flip_edges(
             .par_iter()
             .enumerate()
             .filter_map(|(k, e)| {
-                if e.c == e.d
-                    || exists.contains(&undirected(e.c, e.d))
-                    || (pinned[e.a as usize] && pinned[e.b as usize])
-                {
-                    return None;
-                }
-                let (old, new) = e.pairs();
-                if !keeps_orientation(template, old, new, max_turn) {
-                    return None;
-                }
+                let (old, new) = e.flippable(&exists, pinned, template, max_turn)?;
                 if !dirty[e.f0]
                     && !dirty[e.f1]
                     && let Some(&gain) = known.get(&(e.f0, e.f1))
@@ -112,20 +103,8 @@ pub fn flip_edges(
             evaluated.into_iter().filter_map(|(k, gain)| gain.map(|g| (g, k))).collect();
         // Largest gain first; ties in edge order (the sort is stable).
         gains.sort_by(|x, y| y.0.total_cmp(&x.0));
-        let mut changed = vec![false; faces.len()];
-        let mut round = 0;
-        for (_, k) in gains {
-            let e = &edges[k];
-            if changed[e.f0] || changed[e.f1] || exists.contains(&undirected(e.c, e.d)) {
-                continue;
-            }
-            let (_, new) = e.pairs();
-            (faces[e.f0], faces[e.f1]) = (new[0], new[1]);
-            (changed[e.f0], changed[e.f1]) = (true, true);
-            exists.remove(&undirected(e.a, e.b));
-            exists.insert(undirected(e.c, e.d));
-            round += 1;
-        }
+        let (round, changed) =
+            apply_flips(faces, &edges, gains.into_iter().map(|(_, k)| k), &mut exists, |_| {});
         flips += round;
         if round == 0 {
             break;
@@ -203,38 +182,20 @@ pub fn unspike(
             .enumerate()
             .filter_map(|(k, e)| {
                 let before = spiked[e.f0] + spiked[e.f1];
-                if before == 0
-                    || e.c == e.d
-                    || exists.contains(&undirected(e.c, e.d))
-                    || (pinned[e.a as usize] && pinned[e.b as usize])
-                {
+                if before == 0 {
                     return None;
                 }
-                let (old, new) = e.pairs();
-                if !keeps_orientation(template, old, new, max_turn) {
-                    return None;
-                }
+                let (_, new) = e.flippable(&exists, pinned, template, max_turn)?;
                 let after = turned(new[0]) + turned(new[1]);
                 (after < before).then(|| (before - after, k))
             })
             .collect();
         // Largest gain first; ties in edge order.
         gains.sort_by(|x, y| y.0.cmp(&x.0).then(x.1.cmp(&y.1)));
-        let mut changed = vec![false; faces.len()];
-        let mut round = 0;
-        for (_, k) in gains {
-            let e = &edges[k];
-            if changed[e.f0] || changed[e.f1] || exists.contains(&undirected(e.c, e.d)) {
-                continue;
-            }
+        let (round, _) = apply_flips(faces, &edges, gains.into_iter().map(|(_, k)| k), &mut exists, |e| {
             let (_, new) = e.pairs();
-            (faces[e.f0], faces[e.f1]) = (new[0], new[1]);
             (spiked[e.f0], spiked[e.f1]) = (turned(new[0]), turned(new[1]));
-            (changed[e.f0], changed[e.f1]) = (true, true);
-            exists.remove(&undirected(e.a, e.b));
-            exists.insert(undirected(e.c, e.d));
-            round += 1;
-        }
+        });
         flips += round;
         if round == 0 {
             break;
@@ -274,6 +235,53 @@ impl Edge {
         let (a, b, c, d) = (self.a, self.b, self.c, self.d);
         ([[a, b, c], [b, a, d]], [[c, a, d], [d, b, c]])
     }
+}
+
+impl Edge {
+    /// The pair now and flipped, when the flip is allowed: the faces differ in their third
+    /// vertex, the flipped edge does not exist yet, not both ends are `pinned`, and the
+    /// flipped faces keep their orientation on `template` ([`keeps_orientation`]).
+    fn flippable(
+        &self,
+        exists: &HashSet<(u32, u32)>,
+        pinned: &[bool],
+        template: &[Vec3],
+        max_turn: Real,
+    ) -> Option<([Face; 2], [Face; 2])> {
+        let allowed = self.c != self.d
+            && !exists.contains(&undirected(self.c, self.d))
+            && !(pinned[self.a as usize] && pinned[self.b as usize]);
+        let (old, new) = self.pairs();
+        (allowed && keeps_orientation(template, old, new, max_turn)).then_some((old, new))
+    }
+}
+
+/// Makes the flips of `edges` in `order` (best first), skipping one that touches a face
+/// an earlier flip of the round changed or whose flipped edge exists; `made` sees each
+/// flip made. Returns the number of flips and which faces changed.
+fn apply_flips(
+    faces: &mut [Face],
+    edges: &[Edge],
+    order: impl IntoIterator<Item = usize>,
+    exists: &mut HashSet<(u32, u32)>,
+    mut made: impl FnMut(&Edge),
+) -> (usize, Vec<bool>) {
+    let mut changed = vec![false; faces.len()];
+    let mut flips = 0;
+    for k in order {
+        let e = &edges[k];
+        if changed[e.f0] || changed[e.f1] || exists.contains(&undirected(e.c, e.d)) {
+            continue;
+        }
+        let (_, new) = e.pairs();
+        (faces[e.f0], faces[e.f1]) = (new[0], new[1]);
+        (changed[e.f0], changed[e.f1]) = (true, true);
+        exists.remove(&undirected(e.a, e.b));
+        exists.insert(undirected(e.c, e.d));
+        made(e);
+        flips += 1;
+    }
+    (flips, changed)
 }
 
 fn undirected(a: u32, b: u32) -> (u32, u32) {
