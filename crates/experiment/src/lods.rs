@@ -25,12 +25,12 @@ use anyhow::{Context, Result};
 use desal_driver::stages::DatasetStages;
 use desal_measures::metrics::v2f_halves_indexed;
 use desal_measures::{SurfaceIndex, VertexIndex};
-use desal_mesh::{Face, TriMesh, Vec3};
+use desal_mesh::{TriMesh, Vec3};
 use desal_rig::{MorphTarget, ReadOptions, Rig, SourceDocument};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::measure::{MeshSplit, SpikeSurfaces, spike_count};
+use crate::measure::{MeshSplit, SpikeSurfaces, mesh_part, spike_count};
 use crate::methods::{Inputs, Method};
 use crate::rig::{RigModel, WeldedRig};
 
@@ -84,7 +84,7 @@ pub struct MorphError {
 /// The held-out frames' full-resolution targets, built once for every level and method.
 struct FullFrames {
     /// Per frame (the held-out pose set's non-template poses): the whole posed rig and
-    /// its index, each mesh compact with its index, and the spike surfaces.
+    /// its index, and each mesh apart with its index (for its v2f and its spikes).
     frames: Vec<FullFrame>,
     split: MeshSplit,
     /// Bind-pose index of the full vertices, to tell a simplified vertex's mesh.
@@ -97,8 +97,8 @@ struct FullFrames {
 struct FullFrame {
     pose: usize,
     whole: (TriMesh, SurfaceIndex),
-    meshes: Vec<(TriMesh, SurfaceIndex)>,
-    spikes: SpikeSurfaces<'static>,
+    /// Each mesh apart with its index (for its v2f and its spikes).
+    meshes: SpikeSurfaces<'static>,
 }
 
 /// Every level of the dataset's `lods`, each method of `methods` that can run on a chain
@@ -216,18 +216,10 @@ impl FullFrames {
         let face_mesh = split.face_meshes(&poses.faces, |v| v);
         let frames = (0..poses.pose_count())
             .filter(|&p| p != poses.template)
-            .map(|pose| {
-                let mesh = poses.pose_mesh(pose);
-                let meshes = (0..split.mesh_count as u32)
-                    .map(|m| indexed(compact(&mesh.positions, &mesh.faces, &face_mesh, m)))
-                    .collect();
-                let whole = SurfaceIndex::new(&mesh);
-                FullFrame {
-                    pose,
-                    spikes: SpikeSurfaces::per_mesh(poses, pose, &split),
-                    whole: (mesh, whole),
-                    meshes,
-                }
+            .map(|pose| FullFrame {
+                pose,
+                whole: indexed(poses.pose_mesh(pose)),
+                meshes: SpikeSurfaces::per_mesh(poses, pose, &split),
             })
             .collect();
         let bind_positions = poses.template_positions();
@@ -236,7 +228,7 @@ impl FullFrames {
             .map(|target| {
                 let moved = welded_deltas(model, target);
                 let positions: Vec<Vec3> = bind_positions.iter().zip(&moved).map(|(p, d)| p + d).collect();
-                indexed(compact(&positions, &poses.faces, &face_mesh, target.part as u32))
+                indexed(mesh_part(&positions, &poses.faces, &face_mesh, target.part as u32))
             })
             .collect();
         Self { frames, bind: VertexIndex::new(bind_positions), split, morphs, targets }
@@ -270,14 +262,14 @@ impl FullFrames {
                 let v2f = v2f_halves_indexed(&whole, &frame.whole.0, &frame.whole.1).combined();
                 let meshes = (0..mesh_count)
                     .map(|m| {
-                        let part = compact(&whole.positions, &whole.faces, &face_mesh, m as u32);
+                        let part = mesh_part(&whole.positions, &whole.faces, &face_mesh, m as u32);
                         (part.face_count() > 0).then(|| {
-                            let (full, index) = &frame.meshes[m];
+                            let (full, index) = frame.meshes.part(m).expect("a frame is split by mesh");
                             v2f_halves_indexed(&part, full, index).combined()
                         })
                     })
                     .collect();
-                let spikes = spike_count(&whole.positions, &whole.faces, &face_mesh, &frame.spikes);
+                let spikes = spike_count(&whole.positions, &whole.faces, &face_mesh, &frame.meshes);
                 (v2f, meshes, spikes)
             })
             .collect();
@@ -289,11 +281,12 @@ impl FullFrames {
             .collect();
         let own_targets = desal_rig::morph_targets(rig, document)?;
         // Each of the file's meshes stands for the input mesh most of its vertices are in.
-        let part_of_split = |s: u32| rig.meshes.iter().position(|m| m.vertices.contains(&s));
+        let part_of: Vec<Option<usize>> =
+            sources.iter().map(|&s| rig.meshes.iter().position(|m| m.vertices.contains(&s))).collect();
         let mut votes = vec![vec![0usize; mesh_count]; rig.meshes.len()];
-        for (v, &s) in sources.iter().enumerate() {
-            if let Some(p) = part_of_split(s) {
-                votes[p][self.split.of_vertex[to_full[v] as usize] as usize] += 1;
+        for (v, part) in part_of.iter().enumerate() {
+            if let Some(p) = part {
+                votes[*p][self.split.of_vertex[to_full[v] as usize] as usize] += 1;
             }
         }
         let stands_for: Vec<Option<usize>> =
@@ -312,13 +305,13 @@ impl FullFrames {
                     found = true;
                     let start = rig.meshes[own.part].vertices.start;
                     for (v, &s) in sources.iter().enumerate() {
-                        if part_of_split(s) == Some(own.part) {
+                        if part_of[v] == Some(own.part) {
                             let d = own.deltas[(s - start) as usize];
                             positions[v] += Vec3::new(d[0].into(), d[1].into(), d[2].into());
                         }
                     }
                 }
-                let part = compact(&positions, &mesh.faces, &face_mesh, target.part as u32);
+                let part = mesh_part(&positions, &mesh.faces, &face_mesh, target.part as u32);
                 let v2f = (found && part.face_count() > 0)
                     .then(|| v2f_halves_indexed(&part, full, index).combined());
                 MorphError {
@@ -346,11 +339,13 @@ impl FullFrames {
 /// A target's deltas per welded vertex of `model`'s pose set (zero off its mesh): each
 /// welded vertex takes its first split copy's.
 fn welded_deltas(model: &RigModel, target: &MorphTarget) -> Vec<Vec3> {
-    let weld = &model.posed.weld;
     let range = &model.rig.meshes[target.part].vertices;
-    (0..weld.welded_count())
-        .map(|w| {
-            let s = weld.copies[weld.copy_offsets[w] as usize];
+    model
+        .posed
+        .weld
+        .representatives()
+        .into_iter()
+        .map(|s| {
             if range.contains(&s) {
                 let d = target.deltas[(s - range.start) as usize];
                 Vec3::new(d[0].into(), d[1].into(), d[2].into())
@@ -359,14 +354,6 @@ fn welded_deltas(model: &RigModel, target: &MorphTarget) -> Vec<Vec3> {
             }
         })
         .collect()
-}
-
-/// The faces of mesh `m` (by `face_mesh`) over `positions`, with only the vertices they use.
-fn compact(positions: &[Vec3], faces: &[Face], face_mesh: &[u32], m: u32) -> TriMesh {
-    let chosen: Vec<Face> =
-        faces.iter().zip(face_mesh).filter(|&(_, &of)| of == m).map(|(f, _)| *f).collect();
-    let (kept, faces) = desal_mesh::used_vertices(positions.len(), &chosen);
-    TriMesh { positions: kept.iter().map(|&v| positions[v as usize]).collect(), faces }
 }
 
 fn indexed(mesh: TriMesh) -> (TriMesh, SurfaceIndex) {
@@ -487,11 +474,11 @@ mod tests {
         let v = |x: f64| Vec3::new(x, 0.0, x * x);
         let positions: Vec<Vec3> = (0..6).map(|i| v(i as f64)).collect();
         let faces = [[0, 1, 2], [3, 4, 5], [2, 1, 0]];
-        let part = compact(&positions, &faces, &[0, 1, 0], 1);
+        let part = mesh_part(&positions, &faces, &[0, 1, 0], 1);
         assert_eq!(part.positions, vec![v(3.0), v(4.0), v(5.0)]);
         assert_eq!(part.faces, vec![[0, 1, 2]]);
-        assert_eq!(compact(&positions, &faces, &[0, 1, 0], 0).face_count(), 2);
-        assert_eq!(compact(&positions, &faces, &[0, 1, 0], 2).face_count(), 0);
+        assert_eq!(mesh_part(&positions, &faces, &[0, 1, 0], 0).face_count(), 2);
+        assert_eq!(mesh_part(&positions, &faces, &[0, 1, 0], 2).face_count(), 0);
         assert_eq!(percent(1.5, 2.0), "-25.0 %");
         assert_eq!(percent(1.0, 0.0), "—");
     }

@@ -358,11 +358,11 @@ impl MeshSplit {
     }
 }
 
-/// One full pose's surface for [`spike_count`]: whole, or one index per mesh of a
-/// [`MeshSplit`], each with its faces' unit normals.
+/// One full pose's surface for [`spike_count`]: whole, or each mesh of a [`MeshSplit`]
+/// apart ([`mesh_part`]) with its index.
 pub(crate) enum SpikeSurfaces<'a> {
     Whole { mesh: TriMesh, surface: &'a SurfaceIndex },
-    PerMesh(Vec<(SurfaceIndex, Vec<Vec3>)>),
+    PerMesh(Vec<(TriMesh, SurfaceIndex)>),
 }
 
 impl<'a> SpikeSurfaces<'a> {
@@ -376,31 +376,46 @@ impl<'a> SpikeSurfaces<'a> {
 
     /// `full`'s pose `pose` split by `split`, one index per mesh.
     pub(crate) fn per_mesh(full: &PoseSet, pose: usize, split: &MeshSplit) -> Self {
-        let mesh = full.pose_mesh(pose);
-        let face_mesh = split.face_meshes(&mesh.faces, |v| v);
+        let face_mesh = split.face_meshes(&full.faces, |v| v);
         let parts = (0..split.mesh_count as u32)
             .into_par_iter()
             .map(|m| {
-                let faces: Vec<Face> =
-                    mesh.faces.iter().zip(&face_mesh).filter(|&(_, &of)| of == m).map(|(f, _)| *f).collect();
-                let part = TriMesh { positions: mesh.positions.clone(), faces };
-                let normals = (0..part.face_count()).map(|f| part.face_normal(f)).collect();
-                (SurfaceIndex::new(&part), normals)
+                let part = mesh_part(&full.poses[pose], &full.faces, &face_mesh, m);
+                let index = SurfaceIndex::new(&part);
+                (part, index)
             })
             .collect();
         Self::PerMesh(parts)
     }
 
-    /// The unit normal of the face of mesh `mesh` nearest to `p` (any face when whole).
-    fn nearest_normal(&self, mesh: usize, p: &Vec3) -> Option<Vec3> {
+    /// Mesh `m` of a split pose and its index (`None` when whole).
+    pub(crate) fn part(&self, m: usize) -> Option<&(TriMesh, SurfaceIndex)> {
         match self {
-            Self::Whole { mesh, surface } => surface.nearest(p).map(|(f, _)| mesh.face_normal(f as usize)),
-            Self::PerMesh(parts) => {
-                let (surface, normals) = parts.get(mesh)?;
-                surface.nearest(p).map(|(f, _)| normals[f as usize])
-            }
+            Self::Whole { .. } => None,
+            Self::PerMesh(parts) => parts.get(m),
         }
     }
+
+    /// The unit normal of the face of mesh `mesh` nearest to `p` (any face when whole).
+    fn nearest_normal(&self, mesh: usize, p: &Vec3) -> Option<Vec3> {
+        let (mesh, surface) = match self {
+            Self::Whole { mesh, surface } => (mesh, *surface),
+            Self::PerMesh(parts) => {
+                let (part, surface) = parts.get(mesh)?;
+                (part, surface)
+            }
+        };
+        surface.nearest(p).map(|(f, _)| mesh.face_normal(f as usize))
+    }
+}
+
+/// The faces of mesh `m` (by `face_mesh`, one per face) over `positions`, with only the
+/// vertices they use.
+pub(crate) fn mesh_part(positions: &[Vec3], faces: &[Face], face_mesh: &[u32], m: u32) -> TriMesh {
+    let chosen: Vec<Face> =
+        faces.iter().zip(face_mesh).filter(|&(_, &of)| of == m).map(|(f, _)| *f).collect();
+    let (kept, faces) = desal_mesh::used_vertices(positions.len(), &chosen);
+    TriMesh { positions: kept.iter().map(|&v| positions[v as usize]).collect(), faces }
 }
 
 /// [`spike_count`] of a run: in the rest pose (the simplified template against the full

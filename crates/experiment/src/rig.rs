@@ -252,13 +252,13 @@ impl RigModel {
         if meshes.len() < 2 {
             return None;
         }
-        let weld = &self.posed.weld;
-        let of_vertex = (0..weld.welded_count())
-            .map(|w| {
-                let split = weld.copies[weld.copy_offsets[w] as usize];
-                // The meshes' runs cover the split vertices in order.
-                meshes.partition_point(|m| m.vertices.end <= split) as u32
-            })
+        // The meshes' runs cover the split vertices in order.
+        let of_vertex = self
+            .posed
+            .weld
+            .representatives()
+            .into_iter()
+            .map(|split| meshes.partition_point(|m| m.vertices.end <= split) as u32)
             .collect();
         Some(MeshSplit { of_vertex, mesh_count: meshes.len() })
     }
