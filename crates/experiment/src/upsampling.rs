@@ -107,6 +107,7 @@ pub fn measure(
             .map(|&p| deformed.held_out[p].clone().expect("every test pose is held out"))
             .collect();
         let candidates = [&barycentric, &fitted_up].map(|u| {
+            let u = std::slice::from_ref(u);
             [
                 Upsampled { up_to_full: u, coarse: Coarse::GroundTruth(orig) },
                 Upsampled { up_to_full: u, coarse: Coarse::Given(&deformed_coarse) },

@@ -44,7 +44,10 @@ fn main() {
         for neighbourhood in [Neighbourhood::Geodesic, Neighbourhood::Euclidean] {
             for &neighbours in &[6usize, 8, 12, 16, 20, 24, 32] {
                 for &ridge in &[0.0, 1e-3, 3e-3, 1e-2, 3e-2] {
-                    let up = Upsampler::Fitted(FittedConfig { neighbours, neighbourhood, ridge });
+                    let up = Upsampler::Fitted(FittedConfig {
+                        neighbourhood,
+                        ..FittedConfig::given(neighbours, ridge)
+                    });
                     let (a, b) = mse_pair(&full, &paper, &fit, &validate, &up);
                     println!(
                         "  {neighbourhood:?} k = {neighbours:>2}, ridge = {ridge:<6} {:>8.3} | {:>8.3}   ratio {:.3} | {:.3}",

@@ -11,7 +11,8 @@ use std::borrow::Cow;
 use desal_mesh::{Face, PoseSet};
 
 use crate::error::HierarchyError;
-use crate::level::{LevelInput, Upsampler, build_level_per_mask, nest};
+use crate::fitted::FineLevel;
+use crate::level::{Upsampler, build_levels, nest};
 use crate::sparse::CsrMatrix;
 
 /// One level of a chain: its vertices as vertices of the level above (`map{k+1}`) and
@@ -20,6 +21,16 @@ use crate::sparse::CsrMatrix;
 pub struct ChainLevel<'a> {
     pub coarse_to_fine: &'a [u32],
     pub coarse_faces: &'a [Face],
+}
+
+/// Errors: an `orig` index past `n0` vertices.
+fn check_orig(orig: &[u32], n0: usize) -> Result<(), HierarchyError> {
+    match orig.iter().enumerate().find(|&(_, &o)| o as usize >= n0) {
+        Some((coarse_idx, &fine_idx)) => {
+            Err(HierarchyError::MapOutOfRange { coarse_idx, fine_idx, fine_count: n0 })
+        }
+        None => Ok(()),
+    }
 }
 
 /// The registered pose set of a level: every pose of `full` at `coarse_to_orig`
@@ -31,11 +42,7 @@ pub fn level_poses(
     coarse_to_orig: &[u32],
     faces: &[Face],
 ) -> Result<PoseSet, HierarchyError> {
-    let n0 = full.vertex_count();
-    if let Some((coarse_idx, &fine_idx)) = coarse_to_orig.iter().enumerate().find(|&(_, &o)| o as usize >= n0)
-    {
-        return Err(HierarchyError::MapOutOfRange { coarse_idx, fine_idx, fine_count: n0 });
-    }
+    check_orig(coarse_to_orig, full.vertex_count())?;
     let gather = |v: &[desal_mesh::Vec3]| coarse_to_orig.iter().map(|&o| v[o as usize]).collect();
     Ok(PoseSet::try_new(
         full.names.clone(),
@@ -74,35 +81,74 @@ pub fn composed_upsamplers_per_mask(
     masks: &[&[bool]],
     upsampler: &Upsampler,
 ) -> Result<Vec<Vec<CsrMatrix>>, HierarchyError> {
+    upsamplers_per_mask(full, chain, masks, upsampler)?
+        .into_iter()
+        .map(|levels| {
+            let mut composed: Vec<CsrMatrix> = Vec::with_capacity(levels.len());
+            for up in levels {
+                let next = match composed.last() {
+                    None => up,
+                    Some(c) => c.mul(&up)?,
+                };
+                composed.push(next);
+            }
+            Ok(composed)
+        })
+        .collect()
+}
+
+/// Every level's own U (level 1's first), not composed, once per training mask, built
+/// as [`composed_upsamplers_per_mask`] builds them: what [`crate::Upsampled`] applies
+/// level by level, without the composed matrices (whose rows hold the union of every
+/// level's neighbourhoods).
+///
+/// Errors: those of [`composed_upsamplers`] for any mask.
+pub fn upsamplers_per_mask(
+    full: &PoseSet,
+    chain: &[ChainLevel],
+    masks: &[&[bool]],
+    upsampler: &Upsampler,
+) -> Result<Vec<Vec<CsrMatrix>>, HierarchyError> {
     if chain.is_empty() {
         return Err(HierarchyError::EmptyCoarse { vertices: 0, faces: 0 });
     }
-    let mut composed: Vec<Vec<CsrMatrix>> = masks.iter().map(|_| Vec::with_capacity(chain.len())).collect();
-    let mut fine_to_orig: Vec<u32> = (0..full.vertex_count() as u32).collect();
-    let mut fine_faces: Vec<Face> = full.faces.clone();
-    for (k, level) in chain.iter().enumerate() {
-        // Level 0 is `full` itself, borrowed: a copy would double the largest pose set.
-        let fine = match k {
-            0 => Cow::Borrowed(full),
-            _ => Cow::Owned(level_poses(full, &fine_to_orig, &fine_faces)?),
+    let mut per_mask: Vec<Vec<CsrMatrix>> = masks.iter().map(|_| Vec::with_capacity(chain.len())).collect();
+    let full_template = full.template_positions();
+    let mut fine_to_orig: Option<Vec<u32>> = None;
+    let mut fine_faces: &[Face] = &full.faces;
+    for level in chain {
+        // Level 0 is `full` itself; a coarser level is read in place through its
+        // `orig{k}`: a pose set of its own would add a copy of every pose.
+        let template: Cow<[desal_mesh::Vec3]> = match &fine_to_orig {
+            None => Cow::Borrowed(full_template),
+            Some(orig) => {
+                check_orig(orig, full.vertex_count())?;
+                Cow::Owned(orig.iter().map(|&o| full_template[o as usize]).collect())
+            }
         };
-        let input = LevelInput {
-            fine: &fine,
-            coarse_to_fine: level.coarse_to_fine,
-            coarse_faces: level.coarse_faces,
-            // Not read: `build_level_per_mask` takes each of `masks` in its place.
-            training: &[],
+        let fine = FineLevel {
+            poses: full,
+            orig: fine_to_orig.as_deref(),
+            template: &template,
+            faces: fine_faces,
+            vertex_count: template.len(),
         };
-        for (chain_of_mask, built) in composed.iter_mut().zip(build_level_per_mask(&input, masks, upsampler)?)
+        if let Some((face, &vertex)) = fine_faces
+            .iter()
+            .enumerate()
+            .find_map(|(i, f)| f.iter().find(|&&v| v as usize >= fine.vertex_count).map(|v| (i, v)))
         {
-            let up = match chain_of_mask.last() {
-                None => built.up,
-                Some(c) => c.mul(&built.up)?,
-            };
-            chain_of_mask.push(up);
+            return Err(HierarchyError::FaceOutOfRange { face, vertex, coarse_count: fine.vertex_count });
         }
-        fine_to_orig = nest(&fine_to_orig, level.coarse_to_fine);
-        fine_faces = level.coarse_faces.to_vec();
+        let built = build_levels(&fine, level.coarse_to_fine, level.coarse_faces, masks, upsampler)?;
+        for (levels, built) in per_mask.iter_mut().zip(built) {
+            levels.push(built.up);
+        }
+        fine_to_orig = Some(match &fine_to_orig {
+            None => level.coarse_to_fine.to_vec(),
+            Some(orig) => nest(orig, level.coarse_to_fine),
+        });
+        fine_faces = level.coarse_faces;
     }
-    Ok(composed)
+    Ok(per_mask)
 }

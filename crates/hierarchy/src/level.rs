@@ -6,9 +6,9 @@ use std::time::Instant;
 
 use desal_mesh::{Face, PoseSet, Real, TriMesh};
 
-use crate::barycentric::{Row, barycentric_rows};
+use crate::barycentric::barycentric_rows;
 use crate::error::HierarchyError;
-use crate::fitted::{FitCounts, FittedConfig, fitted_rows_per_training};
+use crate::fitted::{FineLevel, FitCounts, FittedConfig, Knob, Knobs, fitted_rows_per_training};
 use crate::sparse::CsrMatrix;
 
 /// Which upsampler fills U.
@@ -39,17 +39,19 @@ impl Upsampler {
     /// Checks the options. Errors: a neighbour count of 0, a negative or non-finite ridge.
     pub fn validate(&self) -> Result<(), HierarchyError> {
         if let Upsampler::Fitted(c) = self {
-            if c.neighbours == 0 {
+            if c.neighbours == Knob::Given(0) {
                 return Err(HierarchyError::BadOption {
                     option: "neighbours",
-                    value: c.neighbours.to_string(),
+                    value: "0".into(),
                     expected: "at least 1",
                 });
             }
-            if !(c.ridge.is_finite() && c.ridge >= 0.0) {
+            if let Knob::Given(ridge) = c.ridge
+                && !(ridge.is_finite() && ridge >= 0.0)
+            {
                 return Err(HierarchyError::BadOption {
                     option: "ridge",
-                    value: c.ridge.to_string(),
+                    value: ridge.to_string(),
                     expected: "finite and >= 0",
                 });
             }
@@ -103,6 +105,8 @@ pub struct LevelReport {
     /// Largest `|row sum − 1|` of U (rounding only).
     pub up_max_row_sum_error: Real,
     pub fit: FitCounts,
+    /// The fitted upsampler's knobs and how they were settled (`None` for barycentric).
+    pub knobs: Option<Knobs>,
     /// Wall time of [`build_level`], seconds.
     pub seconds: Real,
 }
@@ -127,59 +131,77 @@ pub(crate) fn build_level_per_mask(
     masks: &[&[bool]],
     upsampler: &Upsampler,
 ) -> Result<Vec<Level>, HierarchyError> {
+    let fine = input.fine;
+    let view = FineLevel {
+        poses: fine,
+        orig: None,
+        template: fine.template_positions(),
+        faces: &fine.faces,
+        vertex_count: fine.vertex_count(),
+    };
+    build_levels(&view, input.coarse_to_fine, input.coarse_faces, masks, upsampler)
+}
+
+/// [`build_level_per_mask`] on a level read in place ([`FineLevel`]): a chain's coarser
+/// levels are never gathered into pose sets of their own.
+pub(crate) fn build_levels(
+    fine: &FineLevel,
+    coarse_to_fine: &[u32],
+    coarse_faces: &[Face],
+    masks: &[&[bool]],
+    upsampler: &Upsampler,
+) -> Result<Vec<Level>, HierarchyError> {
     let start = Instant::now();
     upsampler.validate()?;
+    let pose_count = fine.poses.pose_count();
     for &training in masks {
-        check_input(&LevelInput { training, ..*input })?;
+        check_input(fine.vertex_count, pose_count, coarse_to_fine, coarse_faces, training)?;
     }
-    let fine = input.fine;
     let trainings: Vec<Vec<usize>> =
-        masks.iter().map(|mask| (0..fine.pose_count()).filter(|&p| mask[p]).collect()).collect();
+        masks.iter().map(|mask| (0..pose_count).filter(|&p| mask[p]).collect()).collect();
 
-    let down = selection(input.coarse_to_fine, fine.vertex_count())?;
-    let template = fine.template_positions();
+    let down = selection(coarse_to_fine, fine.vertex_count)?;
+    let template = fine.template;
     let coarse_template = TriMesh {
-        positions: input.coarse_to_fine.iter().map(|&f| template[f as usize]).collect(),
-        faces: input.coarse_faces.to_vec(),
+        positions: coarse_to_fine.iter().map(|&f| template[f as usize]).collect(),
+        faces: coarse_faces.to_vec(),
     };
     let barycentric = barycentric_rows(&coarse_template, template);
-    let n_coarse = input.coarse_to_fine.len();
-    let fits: Vec<(Vec<Row>, FitCounts, usize)> = match upsampler {
+    let n_coarse = coarse_to_fine.len();
+    let coarse_adjacency = adjacency(n_coarse, coarse_faces)?;
+    let ups: Vec<(CsrMatrix, FitCounts, Option<Knobs>, usize)> = match upsampler {
         Upsampler::Barycentric => {
-            masks.iter().map(|_| (barycentric.clone(), FitCounts::default(), 0)).collect()
+            let up = CsrMatrix::from_rows(n_coarse, barycentric)?;
+            masks.iter().map(|_| (up.clone(), FitCounts::default(), None, 0)).collect()
         }
         Upsampler::Fitted(config) => {
             if trainings.iter().any(|t| t.is_empty()) {
                 return Err(HierarchyError::NoTrainingPose);
             }
             let sets: Vec<&[usize]> = trainings.iter().map(|t| t.as_slice()).collect();
-            fitted_rows_per_training(fine, input.coarse_to_fine, &barycentric, &sets, config)
+            fitted_rows_per_training(fine, coarse_to_fine, &barycentric, &sets, config)
                 .into_iter()
                 .zip(&trainings)
-                .map(|((rows, counts), training)| (rows, counts, training.len()))
+                .map(|(fit, training)| (fit.up, fit.counts, Some(fit.knobs), training.len()))
                 .collect()
         }
     };
-    let coarse_adjacency = adjacency(n_coarse, input.coarse_faces)?;
-    let ups: Vec<(CsrMatrix, FitCounts, usize)> = fits
-        .into_iter()
-        .map(|(rows, fit, training_poses)| Ok((CsrMatrix::from_rows(n_coarse, rows)?, fit, training_poses)))
-        .collect::<Result<_, HierarchyError>>()?;
     let seconds = start.elapsed().as_secs_f64();
     Ok(ups
         .into_iter()
-        .map(|(up, fit, training_poses)| {
+        .map(|(up, fit, knobs, training_poses)| {
             let up_max_row_sum_error = up.row_sums().iter().fold(0.0, |m: Real, s| m.max((s - 1.0).abs()));
             let report = LevelReport {
                 upsampler: upsampler.name(),
-                fine_vertices: fine.vertex_count(),
+                fine_vertices: fine.vertex_count,
                 coarse_vertices: n_coarse,
-                coarse_faces: input.coarse_faces.len(),
+                coarse_faces: coarse_faces.len(),
                 training_poses,
                 up_nnz: up.nnz(),
                 up_mean_row_nnz: up.nnz() as Real / up.rows.max(1) as Real,
                 up_max_row_sum_error,
                 fit,
+                knobs,
                 seconds,
             };
             Level { down: down.clone(), up, coarse_adjacency: coarse_adjacency.clone(), report }
@@ -187,20 +209,22 @@ pub(crate) fn build_level_per_mask(
         .collect())
 }
 
-fn check_input(input: &LevelInput) -> Result<(), HierarchyError> {
-    let fine_count = input.fine.vertex_count();
-    let coarse_count = input.coarse_to_fine.len();
-    if coarse_count == 0 || input.coarse_faces.is_empty() {
-        return Err(HierarchyError::EmptyCoarse { vertices: coarse_count, faces: input.coarse_faces.len() });
+fn check_input(
+    fine_count: usize,
+    pose_count: usize,
+    coarse_to_fine: &[u32],
+    coarse_faces: &[Face],
+    training: &[bool],
+) -> Result<(), HierarchyError> {
+    let coarse_count = coarse_to_fine.len();
+    if coarse_count == 0 || coarse_faces.is_empty() {
+        return Err(HierarchyError::EmptyCoarse { vertices: coarse_count, faces: coarse_faces.len() });
     }
-    if input.training.len() != input.fine.pose_count() {
-        return Err(HierarchyError::MaskLength {
-            mask: input.training.len(),
-            poses: input.fine.pose_count(),
-        });
+    if training.len() != pose_count {
+        return Err(HierarchyError::MaskLength { mask: training.len(), poses: pose_count });
     }
     let mut seen = vec![usize::MAX; fine_count];
-    for (coarse_idx, &fine_idx) in input.coarse_to_fine.iter().enumerate() {
+    for (coarse_idx, &fine_idx) in coarse_to_fine.iter().enumerate() {
         let slot = seen.get_mut(fine_idx as usize).ok_or(HierarchyError::MapOutOfRange {
             coarse_idx,
             fine_idx,
@@ -211,7 +235,7 @@ fn check_input(input: &LevelInput) -> Result<(), HierarchyError> {
         }
         *slot = coarse_idx;
     }
-    for (face, f) in input.coarse_faces.iter().enumerate() {
+    for (face, f) in coarse_faces.iter().enumerate() {
         if let Some(&vertex) = f.iter().find(|&&v| v as usize >= coarse_count) {
             return Err(HierarchyError::FaceOutOfRange { face, vertex, coarse_count });
         }

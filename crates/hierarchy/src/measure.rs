@@ -62,11 +62,15 @@ pub enum V2f {
     Skip,
 }
 
-/// One candidate of [`upsampling_errors`]: a composed upsampler (`n_0 × n_k`) and what it
-/// upsamples.
+/// One candidate of [`upsampling_errors`]: an upsampler from level k to full resolution
+/// and what it upsamples.
 #[derive(Debug, Clone, Copy)]
 pub struct Upsampled<'a> {
-    pub up_to_full: &'a CsrMatrix,
+    /// The chain of U's from level k up to level 0, level 1's first (`n_0 × n_1`) and
+    /// level k's last, applied last to first; a composed U (`n_0 × n_k`) is a chain of
+    /// one. Applying the chain needs no composed matrix, whose rows hold the union of
+    /// every level's neighbourhoods.
+    pub up_to_full: &'a [CsrMatrix],
     pub coarse: Coarse<'a>,
 }
 
@@ -82,7 +86,10 @@ pub fn upsampling_error(
     coarse_to_orig: &[u32],
     poses: &[usize],
 ) -> Result<UpsamplingError, HierarchyError> {
-    let candidate = Upsampled { up_to_full, coarse: Coarse::GroundTruth(coarse_to_orig) };
+    let candidate = Upsampled {
+        up_to_full: std::slice::from_ref(up_to_full),
+        coarse: Coarse::GroundTruth(coarse_to_orig),
+    };
     Ok(upsampling_errors(full, poses, &[candidate], V2f::Measure)?.remove(0))
 }
 
@@ -202,7 +209,10 @@ pub fn upsampling_mse(
     coarse_to_orig: &[u32],
     poses: &[usize],
 ) -> Result<Vec<Real>, HierarchyError> {
-    let candidate = Upsampled { up_to_full, coarse: Coarse::GroundTruth(coarse_to_orig) };
+    let candidate = Upsampled {
+        up_to_full: std::slice::from_ref(up_to_full),
+        coarse: Coarse::GroundTruth(coarse_to_orig),
+    };
     check_candidate(full, &candidate, poses)?;
     Ok(poses
         .par_iter()
@@ -220,11 +230,33 @@ fn upsample_pose(full: &PoseSet, candidate: &Upsampled, slot: usize, pose: usize
         Coarse::GroundTruth(coarse_to_orig) => {
             let truth = &full.poses[pose];
             let coarse: Vec<Vec3> = coarse_to_orig.iter().map(|&o| truth[o as usize]).collect();
-            candidate.up_to_full.apply(&coarse)
+            apply_chain(candidate.up_to_full, &coarse)
         }
-        Coarse::Given(positions) => candidate.up_to_full.apply(&positions[slot]),
+        Coarse::Given(positions) => apply_chain(candidate.up_to_full, &positions[slot]),
     };
     up.expect("shapes checked by the caller")
+}
+
+/// The chain's U's applied to `coarse`, last to first.
+fn apply_chain(chain: &[CsrMatrix], coarse: &[Vec3]) -> Result<Vec<Vec3>, HierarchyError> {
+    let (last, rest) = chain.split_last().expect("a chain checked non-empty");
+    rest.iter().rev().try_fold(last.apply(coarse)?, |positions, up| up.apply(&positions))
+}
+
+/// The shape (`rows × cols`) of the chain's product. Errors: an empty chain, neighbours
+/// whose shapes do not meet.
+fn chain_shape(chain: &[CsrMatrix]) -> Result<(usize, usize), HierarchyError> {
+    let (first, last) = match (chain.first(), chain.last()) {
+        (Some(f), Some(l)) => (f, l),
+        _ => return Err(HierarchyError::EmptyCoarse { vertices: 0, faces: 0 }),
+    };
+    if let Some(w) = chain.windows(2).find(|w| w[0].cols != w[1].rows) {
+        return Err(HierarchyError::ShapeMismatch {
+            left: (w[0].rows, w[0].cols),
+            right: (w[1].rows, w[1].cols),
+        });
+    }
+    Ok((first.rows, last.cols))
 }
 
 fn squared_errors(up: &[Vec3], truth: &[Vec3]) -> Vec<Real> {
@@ -233,7 +265,7 @@ fn squared_errors(up: &[Vec3], truth: &[Vec3]) -> Vec<Real> {
 
 fn check_candidate(full: &PoseSet, candidate: &Upsampled, poses: &[usize]) -> Result<(), HierarchyError> {
     let n0 = full.vertex_count();
-    let up = candidate.up_to_full;
+    let (rows, cols) = chain_shape(candidate.up_to_full)?;
     let n_coarse = match candidate.coarse {
         Coarse::GroundTruth(coarse_to_orig) => {
             if let Some((coarse_idx, &fine_idx)) =
@@ -244,20 +276,20 @@ fn check_candidate(full: &PoseSet, candidate: &Upsampled, poses: &[usize]) -> Re
             coarse_to_orig.len()
         }
         Coarse::Given(positions) => {
-            if let Some(p) = positions.iter().find(|p| p.len() != up.cols) {
-                return Err(HierarchyError::ShapeMismatch { left: (up.rows, up.cols), right: (p.len(), 3) });
+            if let Some(p) = positions.iter().find(|p| p.len() != cols) {
+                return Err(HierarchyError::ShapeMismatch { left: (rows, cols), right: (p.len(), 3) });
             }
             if positions.len() != poses.len() {
                 return Err(HierarchyError::ShapeMismatch {
-                    left: (poses.len(), up.cols),
-                    right: (positions.len(), up.cols),
+                    left: (poses.len(), cols),
+                    right: (positions.len(), cols),
                 });
             }
-            up.cols
+            cols
         }
     };
-    if up.rows != n0 || up.cols != n_coarse {
-        return Err(HierarchyError::ShapeMismatch { left: (up.rows, up.cols), right: (n0, n_coarse) });
+    if rows != n0 || cols != n_coarse {
+        return Err(HierarchyError::ShapeMismatch { left: (rows, cols), right: (n0, n_coarse) });
     }
     if let Some(&pose) = poses.iter().find(|&&p| p >= full.pose_count()) {
         return Err(HierarchyError::PoseOutOfRange { pose, poses: full.pose_count() });

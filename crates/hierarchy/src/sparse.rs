@@ -23,6 +23,57 @@ pub struct CsrMatrix {
     pub values: Vec<Real>,
 }
 
+/// A [`CsrMatrix`] built row by row, as [`CsrMatrix::from_rows`] builds it, without
+/// holding every row first.
+#[derive(Debug, Clone)]
+pub struct CsrBuilder {
+    cols: usize,
+    row_ptr: Vec<usize>,
+    col_idx: Vec<u32>,
+    values: Vec<Real>,
+}
+
+impl CsrBuilder {
+    pub fn new(cols: usize) -> Self {
+        Self { cols, row_ptr: vec![0], col_idx: Vec::new(), values: Vec::new() }
+    }
+
+    /// Appends the next row: entries summed per column, zeros left out. Errors: a column
+    /// past the width.
+    pub fn push_row(&mut self, mut row: Vec<(u32, Real)>) -> Result<(), HierarchyError> {
+        let r = self.row_ptr.len() - 1;
+        if let Some(&(c, _)) = row.iter().find(|&&(c, _)| c as usize >= self.cols) {
+            return Err(HierarchyError::ColumnOutOfRange { row: r, col: c, cols: self.cols });
+        }
+        row.sort_by_key(|&(c, _)| c);
+        let mut i = 0;
+        while i < row.len() {
+            let c = row[i].0;
+            let mut sum = 0.0;
+            while i < row.len() && row[i].0 == c {
+                sum += row[i].1;
+                i += 1;
+            }
+            if sum != 0.0 {
+                self.col_idx.push(c);
+                self.values.push(sum);
+            }
+        }
+        self.row_ptr.push(self.col_idx.len());
+        Ok(())
+    }
+
+    pub fn finish(self) -> CsrMatrix {
+        CsrMatrix {
+            rows: self.row_ptr.len() - 1,
+            cols: self.cols,
+            row_ptr: self.row_ptr,
+            col_idx: self.col_idx,
+            values: self.values,
+        }
+    }
+}
+
 /// The matrix as coordinate triplets in row-major order (scipy's `coo_matrix` layout).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Coo {
@@ -39,31 +90,11 @@ impl CsrMatrix {
     ///
     /// Errors: a column `>= cols`.
     pub fn from_rows(cols: usize, rows: Vec<Vec<(u32, Real)>>) -> Result<Self, HierarchyError> {
-        let mut row_ptr = Vec::with_capacity(rows.len() + 1);
-        row_ptr.push(0);
-        let mut col_idx = Vec::new();
-        let mut values = Vec::new();
-        for (r, mut row) in rows.into_iter().enumerate() {
-            if let Some(&(c, _)) = row.iter().find(|&&(c, _)| c as usize >= cols) {
-                return Err(HierarchyError::ColumnOutOfRange { row: r, col: c, cols });
-            }
-            row.sort_by_key(|&(c, _)| c);
-            let mut i = 0;
-            while i < row.len() {
-                let c = row[i].0;
-                let mut sum = 0.0;
-                while i < row.len() && row[i].0 == c {
-                    sum += row[i].1;
-                    i += 1;
-                }
-                if sum != 0.0 {
-                    col_idx.push(c);
-                    values.push(sum);
-                }
-            }
-            row_ptr.push(col_idx.len());
+        let mut builder = CsrBuilder::new(cols);
+        for row in rows {
+            builder.push_row(row)?;
         }
-        Ok(Self { rows: row_ptr.len() - 1, cols, row_ptr, col_idx, values })
+        Ok(builder.finish())
     }
 
     /// The `n × n` identity.

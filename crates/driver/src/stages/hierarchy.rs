@@ -20,8 +20,9 @@ use std::borrow::Cow;
 
 use anyhow::{Result, bail};
 use desal_hierarchy::{
-    ChainLevel, Coarse, CsrMatrix, FittedConfig, Level, LevelInput, Neighbourhood, Upsampled, Upsampler, V2f,
-    adjacency, build_level, composed_upsamplers, level_poses, nest, selection, upsampling_errors,
+    ChainLevel, Coarse, CsrMatrix, FittedConfig, Knob, Knobs, Level, LevelInput, Neighbourhood, Settled,
+    Upsampled, Upsampler, V2f, adjacency, build_level, level_poses, nest, selection, upsamplers_per_mask,
+    upsampling_errors,
 };
 use desal_io::artifact::{ArtifactKind, ContentHash, HierarchyLevelV1};
 use desal_io::npz::{CooArrays, HierarchyArrays};
@@ -72,10 +73,12 @@ pub struct HierarchyParams {
     pub levels: Vec<usize>,
     #[serde(default)]
     pub upsampler: UpsamplerName,
-    /// Fitted only: candidate coarse vertices per fine vertex (default 16).
+    /// Fitted only: candidate coarse vertices per fine vertex (default: chosen per fit
+    /// by held-out error from `desal_hierarchy::NEIGHBOUR_GRID`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub neighbours: Option<usize>,
-    /// Fitted only: relative ridge toward the barycentric row (default 3e-3).
+    /// Fitted only: relative ridge toward the barycentric row (default: chosen per fit by
+    /// held-out error from `desal_hierarchy::RIDGE_GRID`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ridge: Option<f64>,
     /// Fitted only: `euclidean` (default) or `geodesic` candidates.
@@ -124,8 +127,8 @@ impl HierarchyParams {
             UpsamplerName::Fitted => {
                 let d = FittedConfig::default();
                 Upsampler::Fitted(FittedConfig {
-                    neighbours: self.neighbours.unwrap_or(d.neighbours),
-                    ridge: self.ridge.unwrap_or(d.ridge),
+                    neighbours: self.neighbours.map_or(d.neighbours, Knob::Given),
+                    ridge: self.ridge.map_or(d.ridge, Knob::Given),
                     neighbourhood: match self.neighbourhood {
                         None => d.neighbourhood,
                         Some(NeighbourhoodName::Euclidean) => Neighbourhood::Euclidean,
@@ -229,14 +232,74 @@ fn upsampler_json(up: &Upsampler) -> serde_json::Value {
         Upsampler::Barycentric => json!("barycentric"),
         Upsampler::Fitted(FittedConfig { neighbours, neighbourhood, ridge }) => json!({
             "fitted": {
-                "neighbours": neighbours,
-                "ridge": ridge,
+                "neighbours": knob_json(neighbours),
+                "ridge": knob_json(ridge),
                 "neighbourhood": match neighbourhood {
                     Neighbourhood::Euclidean => "euclidean",
                     Neighbourhood::Geodesic => "geodesic",
                 },
             }
         }),
+    }
+}
+
+/// A given knob's value, or `"held-out"` (chosen per fit).
+fn knob_json<T: Serialize>(knob: &Knob<T>) -> serde_json::Value {
+    match knob {
+        Knob::Given(v) => json!(v),
+        Knob::HeldOut => json!("held-out"),
+    }
+}
+
+/// The fitted upsampler's knobs as a level's U used them, and how they were settled.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct KnobsSummary {
+    pub neighbours: usize,
+    pub ridge: f64,
+    /// `given`, `held-out` (the grid point of lowest held-out error on the level's
+    /// training poses) or `fallback` (too few poses or groups for two folds).
+    pub settled: String,
+    /// Held out only: the folds, the fine vertices measured and every grid point tried,
+    /// its held-out error relative to the chosen point's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub folds: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rows: Option<usize>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub grid: Vec<KnobPoint>,
+}
+
+/// One grid point of [`KnobsSummary`].
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct KnobPoint {
+    pub neighbours: usize,
+    pub ridge: f64,
+    /// Its held-out error over the chosen point's (1 at the chosen point).
+    pub relative_error: f64,
+}
+
+impl KnobsSummary {
+    fn of(knobs: &Knobs) -> Self {
+        let (settled, folds, rows, grid) = match &knobs.settled {
+            Settled::Given => ("given", None, None, Vec::new()),
+            Settled::TooFewPoses => ("fallback", None, None, Vec::new()),
+            Settled::HeldOut { folds, rows, grid } => {
+                let best = grid
+                    .iter()
+                    .find(|p| p.neighbours == knobs.neighbours && p.ridge == knobs.ridge)
+                    .map_or(1.0, |p| p.sse);
+                let points = grid
+                    .iter()
+                    .map(|p| KnobPoint {
+                        neighbours: p.neighbours,
+                        ridge: p.ridge,
+                        relative_error: if best > 0.0 { p.sse / best } else { 1.0 },
+                    })
+                    .collect();
+                ("held-out", Some(*folds), Some(*rows), points)
+            }
+        };
+        Self { neighbours: knobs.neighbours, ridge: knobs.ridge, settled: settled.into(), folds, rows, grid }
     }
 }
 
@@ -281,6 +344,9 @@ pub struct LevelSummary {
     pub up_mean_row_nnz: f64,
     /// Largest `|row sum − 1|` of U.
     pub up_max_row_sum_error: f64,
+    /// The fitted upsampler's knobs (`None` for barycentric).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub knobs: Option<KnobsSummary>,
     /// Wall time of simplify + map + saliency + U of this level, seconds (held-out
     /// measurement excluded).
     pub seconds: f64,
@@ -301,11 +367,15 @@ impl LevelSummary {
     /// The level's line in the run's table and on `desal hierarchy`'s stderr.
     pub fn note(&self) -> String {
         format!(
-            "level {}: {} -> {} vertices, {} U ({} nnz), held-out MSE fitted {:.3e} / barycentric {:.3e} m² = {:.3}, {:.2} s (+ {:.2} s held out)",
+            "level {}: {} -> {} vertices, {} U ({}{} nnz), held-out MSE fitted {:.3e} / barycentric {:.3e} m² = {:.3}, {:.2} s (+ {:.2} s held out)",
             self.level,
             self.fine_vertices,
             self.vertices,
             self.upsampler,
+            self.knobs.as_ref().map_or(String::new(), |k| format!(
+                "{} neighbours, ridge {:e} ({}), ",
+                k.neighbours, k.ridge, k.settled
+            )),
             self.up_nnz,
             self.heldout_fitted.mse,
             self.heldout_barycentric.mse,
@@ -412,6 +482,7 @@ pub fn compute_level(
         adjacency_nnz: level.coarse_adjacency.nnz(),
         up_mean_row_nnz: r.up_mean_row_nnz,
         up_max_row_sum_error: r.up_max_row_sum_error,
+        knobs: r.knobs.as_ref().map(KnobsSummary::of),
         seconds,
         matrices_seconds: r.seconds,
         heldout_seconds: heldout_start.elapsed().as_secs_f64(),
@@ -507,32 +578,32 @@ fn heldout<const N: usize>(
         .map(|l| ChainLevel { coarse_to_fine: &l.coarse_to_fine, coarse_faces: &l.faces })
         .collect();
     let last = chain.last().expect("non-empty chain");
-    let composed = |mask: &[bool], up: &Upsampler| -> Result<CsrMatrix> {
-        Ok(composed_upsamplers(full, &levels, mask, up)?.pop().expect("one per level"))
-    };
-    let mut fold_independent: [Option<CsrMatrix>; N] = std::array::from_fn(|_| None);
-    for (k, up) in upsamplers.iter().enumerate() {
-        if matches!(up, Upsampler::Barycentric) {
-            fold_independent[k] = Some(composed(&all, up)?);
-        }
-    }
+    let folds_measured: Vec<(usize, Vec<usize>)> =
+        heldout_folds(full).into_iter().enumerate().filter(|(_, measured)| !measured.is_empty()).collect();
+    let masks: Vec<Vec<bool>> = folds_measured
+        .iter()
+        .map(|(_, measured)| (0..full.pose_count()).map(|p| all[p] && !measured.contains(&p)).collect())
+        .collect();
+    let mask_refs: Vec<&[bool]> = masks.iter().map(Vec::as_slice).collect();
+    // Per upsampler, per fold, every level's U (not composed: the measurement applies
+    // them level by level). The folds of a fitted upsampler are fitted together, sharing
+    // their sums over poses; a barycentric chain does not depend on the training poses
+    // (template only), so it is built once for every fold.
+    let per_fold: Vec<Vec<Vec<CsrMatrix>>> = upsamplers
+        .iter()
+        .map(|up| match up {
+            Upsampler::Barycentric => Ok(upsamplers_per_mask(full, &levels, &[&all], up)?),
+            Upsampler::Fitted(_) => Ok(upsamplers_per_mask(full, &levels, &mask_refs, up)?),
+        })
+        .collect::<Result<_>>()?;
     let mut folds: [Vec<FoldError>; N] = std::array::from_fn(|_| Vec::new());
     let mut vertex_sums: [Vec<f64>; N] = std::array::from_fn(|_| vec![0.0; full.vertex_count()]);
-    for (fold, measured) in heldout_folds(full).into_iter().enumerate() {
-        let mask: Vec<bool> = (0..full.pose_count()).map(|p| all[p] && !measured.contains(&p)).collect();
-        if measured.is_empty() {
-            continue;
-        }
-        let refitted: Vec<Option<CsrMatrix>> = upsamplers
+    for (slot, ((fold, measured), mask)) in folds_measured.into_iter().zip(&masks).enumerate() {
+        let candidates: Vec<Upsampled> = per_fold
             .iter()
-            .zip(&fold_independent)
-            .map(|(up, fixed)| if fixed.is_some() { Ok(None) } else { composed(&mask, up).map(Some) })
-            .collect::<Result<_>>()?;
-        let candidates: Vec<Upsampled> = refitted
-            .iter()
-            .zip(&fold_independent)
-            .map(|(refit, fixed)| Upsampled {
-                up_to_full: refit.as_ref().or(fixed.as_ref()).expect("one of the two"),
+            .map(|chains| Upsampled {
+                // One chain for every fold (barycentric), or one per fold.
+                up_to_full: &chains[if chains.len() == 1 { 0 } else { slot }],
                 coarse: Coarse::GroundTruth(&last.coarse_to_orig),
             })
             .collect();
@@ -692,9 +763,17 @@ mod tests {
         let key = |hp: &HierarchyParams| full_key(hp).hash();
         // As for every stage, a default given explicitly resolves to the same config (it
         // is only recorded among the user's parameters).
-        let explicit = HierarchyParams { neighbours: Some(16), ..params(vec![10]) };
-        assert_eq!(full_key(&params(vec![10])).resolved, full_key(&explicit).resolved, "16 is the default");
+        let explicit =
+            HierarchyParams { neighbourhood: Some(NeighbourhoodName::Euclidean), ..params(vec![10]) };
+        assert_eq!(
+            full_key(&params(vec![10])).resolved,
+            full_key(&explicit).resolved,
+            "euclidean is the default"
+        );
         let base = key(&params(vec![10]));
+        // Neighbours and ridge are chosen by default: the former fixed values are other keys.
+        assert_ne!(base, key(&HierarchyParams { neighbours: Some(16), ..params(vec![10]) }));
+        assert_ne!(base, key(&HierarchyParams { ridge: Some(3e-3), ..params(vec![10]) }));
         assert_ne!(base, key(&HierarchyParams { neighbours: Some(8), ..params(vec![10]) }));
         assert_ne!(base, key(&HierarchyParams { ridge: Some(0.0), ..params(vec![10]) }));
         assert_ne!(

@@ -461,6 +461,9 @@ def hierarchy(
     ``"paper"``, ``"multipose"``, ``"desal"``, ``"desal-refit"``, ``"qslim-optimal"``);
     ``upsampler`` is
     ``"fitted"`` (least squares over the poses) or ``"barycentric"`` (COMA's rule).
+    ``neighbours`` and ``ridge`` left as ``None`` are chosen per level by held-out error
+    on the level's own training poses (whole groups when ``poses`` has groups); each
+    step of ``report`` names them under ``"knobs"``.
     The same as ``[dataset.hierarchy]`` in a pipeline file.
     """
     ps = _pose_set(poses, faces, labels, template, progress)
