@@ -819,9 +819,13 @@ pub fn desal_upsample(
         .simplify(config)?;
     let mut out = output(&weighted.config, Method::DesalUpsample.name(), &weighted.simplified);
     out.summary.seconds = started.elapsed().as_secs_f64();
+    let kept = match weighted.kept {
+        desal_refit::upsampler::Run::First => "the first run kept",
+        desal_refit::upsampler::Run::Weighted => "the weighted run kept",
+    };
     out.note = format!(
-        "{} (multi-pose quadrics weighted by the first run's held-out upsampling error, MSE {:.3e})",
-        out.note, weighted.first_mse
+        "{} (multi-pose quadrics, then weighted by the first run's held-out upsampling error; held-out MSE {:.3e} first, {:.3e} weighted: {kept})",
+        out.note, weighted.first_mse, weighted.weighted_mse
     );
     Ok(out)
 }
