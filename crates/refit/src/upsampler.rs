@@ -241,6 +241,26 @@ mod tests {
         assert!((w[0] - (0.2f64 / 2.2).sqrt()).abs() < 1e-12);
     }
 
+    /// Step 5: the mesh returned is the run with the lower held-out error, measured again
+    /// here on what was returned, and its configuration is that run's.
+    #[test]
+    fn the_run_with_the_lower_held_out_error_is_kept() {
+        let (poses, labels) = desal_testdata::golden::bent_tube_pose_set();
+        let upsampler = Upsampler::default();
+        let seen: Vec<usize> = (0..poses.pose_count()).collect();
+        let for_upsampler =
+            ForUpsampler { poses: &poses, labels: &labels, seen: &seen, upsampler: &upsampler };
+        // At 40 vertices the weighted run is kept, at 30 the first (both branches).
+        for (target, kept) in [(40, Run::Weighted), (30, Run::First)] {
+            let config = SimplifyConfig::qslim(desal_simplify::Target::Vertices(target));
+            let result = for_upsampler.simplify(&config).unwrap();
+            let (_, kept_mse) = for_upsampler.held_out_error(&result.simplified).unwrap();
+            assert_eq!(kept_mse, result.first_mse.min(result.weighted_mse), "{target}: {result:?}");
+            assert_eq!(result.kept, kept, "{target}");
+            assert_eq!(result.config.saliency, result.kept == Run::Weighted);
+        }
+    }
+
     /// Smoothing spreads a spike over its ring and keeps the total on a closed ring.
     #[test]
     fn smoothing_spreads_a_spike_to_its_ring() {
