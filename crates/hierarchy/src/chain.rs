@@ -23,16 +23,6 @@ pub struct ChainLevel<'a> {
     pub coarse_faces: &'a [Face],
 }
 
-/// Errors: an `orig` index past `n0` vertices.
-fn check_orig(orig: &[u32], n0: usize) -> Result<(), HierarchyError> {
-    match orig.iter().enumerate().find(|&(_, &o)| o as usize >= n0) {
-        Some((coarse_idx, &fine_idx)) => {
-            Err(HierarchyError::MapOutOfRange { coarse_idx, fine_idx, fine_count: n0 })
-        }
-        None => Ok(()),
-    }
-}
-
 /// The registered pose set of a level: every pose of `full` at `coarse_to_orig`
 /// (`orig{k}`), with the level's `faces`; names and template as `full`'s.
 ///
@@ -42,7 +32,11 @@ pub fn level_poses(
     coarse_to_orig: &[u32],
     faces: &[Face],
 ) -> Result<PoseSet, HierarchyError> {
-    check_orig(coarse_to_orig, full.vertex_count())?;
+    let n0 = full.vertex_count();
+    if let Some((coarse_idx, &fine_idx)) = coarse_to_orig.iter().enumerate().find(|&(_, &o)| o as usize >= n0)
+    {
+        return Err(HierarchyError::MapOutOfRange { coarse_idx, fine_idx, fine_count: n0 });
+    }
     let gather = |v: &[desal_mesh::Vec3]| coarse_to_orig.iter().map(|&o| v[o as usize]).collect();
     Ok(PoseSet::try_new(
         full.names.clone(),
@@ -118,28 +112,14 @@ pub fn upsamplers_per_mask(
     let mut fine_faces: &[Face] = &full.faces;
     for level in chain {
         // Level 0 is `full` itself; a coarser level is read in place through its
-        // `orig{k}`: a pose set of its own would add a copy of every pose.
+        // `orig{k}`: a pose set of its own would add a copy of every pose. Its map and
+        // faces were checked against the level above by `build_levels` on the way down.
         let template: Cow<[desal_mesh::Vec3]> = match &fine_to_orig {
             None => Cow::Borrowed(full_template),
-            Some(orig) => {
-                check_orig(orig, full.vertex_count())?;
-                Cow::Owned(orig.iter().map(|&o| full_template[o as usize]).collect())
-            }
+            Some(orig) => Cow::Owned(orig.iter().map(|&o| full_template[o as usize]).collect()),
         };
-        let fine = FineLevel {
-            poses: full,
-            orig: fine_to_orig.as_deref(),
-            template: &template,
-            faces: fine_faces,
-            vertex_count: template.len(),
-        };
-        if let Some((face, &vertex)) = fine_faces
-            .iter()
-            .enumerate()
-            .find_map(|(i, f)| f.iter().find(|&&v| v as usize >= fine.vertex_count).map(|v| (i, v)))
-        {
-            return Err(HierarchyError::FaceOutOfRange { face, vertex, coarse_count: fine.vertex_count });
-        }
+        let fine =
+            FineLevel { poses: full, orig: fine_to_orig.as_deref(), template: &template, faces: fine_faces };
         let built = build_levels(&fine, level.coarse_to_fine, level.coarse_faces, masks, upsampler)?;
         for (levels, built) in per_mask.iter_mut().zip(built) {
             levels.push(built.up);

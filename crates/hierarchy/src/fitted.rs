@@ -32,7 +32,8 @@
 //! people it is fitted on: one split of SCAPE's 71 poses of one man chose 16 neighbours
 //! and ridge 3e-3 (the crate docs' table), while 144 ANNY samples of 24 people want 32
 //! and 1e-5, and SCAPE's own five folds now pick 32 and 1e-3 (level 1) or 3e-4 (level 2),
-//! 2.6 % and 7.4 % below 16 and 3e-3 in held-out error. So by default
+//! 2.6 % and 7.4 % below 16 and 3e-3 in held-out error (`desal run
+//! pipelines/scape-hierarchy.toml`, each step's `knobs.grid` in `hierarchy.json`). So by default
 //! ([`Knob::HeldOut`]) each fit chooses them on its own training poses:
 //!
 //! 1. the training poses are dealt into [`TUNING_FOLDS`] folds, whole groups at a time
@@ -50,12 +51,12 @@
 //!
 //! Each training set chooses from its own poses only, so a held-out fold's U never saw
 //! the fold even through its knobs. The choice is deterministic (rows summed in order).
-//! Measured on ANNY (`crates/python/tests/test_anny.py`, unseen people, the same levels),
-//! the held-out choice took the level-2 error from 0.059 to 0.036 of COMA's barycentric
-//! U's, and level 1's from 0.0059 to 0.0030 (the same hierarchy; `desal-upsample` then
-//! keeps its better run and reaches 0.0016 and 0.030); `hierarchy.json`'s own held-out
-//! figures, over whole shapes, agree with the unseen ones within 25 % (the test asserts
-//! it).
+//! Measured on ANNY (`pytest -s crates/python/tests/test_anny.py`, unseen people, the
+//! same levels), the held-out choice took the level-2 error from 0.059 (at 7445de0) to
+//! 0.036 of COMA's barycentric U's, and level 1's from 0.0059 to 0.0030 (at 0390460;
+//! `desal-upsample` then keeps its better run and reaches 0.0016 and 0.030);
+//! `hierarchy.json`'s own held-out figures, over whole shapes, agree with the unseen ones
+//! within 25 % (the test asserts it).
 
 use desal_mesh::{PoseSet, Real, Vec3};
 use rayon::prelude::*;
@@ -200,17 +201,21 @@ pub struct GridPoint {
 /// The fine level of a fit, read in place: a pose set's own vertices (`orig` `None`),
 /// or the vertices `orig` of a larger pose set (a coarser level of a chain, whose poses
 /// are never gathered into a pose set of their own). `template` and `faces` are the
-/// level's own, `vertex_count` its vertex count.
+/// level's own.
 #[derive(Debug, Clone, Copy)]
 pub struct FineLevel<'a> {
     pub poses: &'a PoseSet,
     pub orig: Option<&'a [u32]>,
     pub template: &'a [Vec3],
     pub faces: &'a [desal_mesh::Face],
-    pub vertex_count: usize,
 }
 
 impl FineLevel<'_> {
+    /// The level's vertex count.
+    pub fn vertex_count(&self) -> usize {
+        self.template.len()
+    }
+
     /// Fine vertex `fine_idx` in pose `pose`.
     fn at(&self, pose: usize, fine_idx: usize) -> Vec3 {
         let vertex = self.orig.map_or(fine_idx, |o| o[fine_idx] as usize);
@@ -260,12 +265,12 @@ pub fn fitted_rows_per_training(
         trainings.iter().map(|_| (CsrBuilder::new(coarse_to_fine.len()), FitCounts::default())).collect();
     // A chunk of rows at a time, each set's rows appended to its matrix: the rows of
     // every set are never all held at once beside the matrices.
-    let vertices: Vec<usize> = (0..fine.vertex_count).collect();
+    let vertices: Vec<usize> = (0..fine.vertex_count()).collect();
     for chunk in vertices.chunks(ROW_CHUNK) {
         let solved: Vec<Vec<(Row, Solve)>> = chunk
             .par_iter()
             .map_init(
-                || Scratch::new(fine.vertex_count),
+                || Scratch::new(fine.vertex_count()),
                 |scratch, &fine_idx| match rows.problem(fine_idx, need, scratch) {
                     None => vec![(vec![(rows.fine_to_coarse[fine_idx], 1.0)], Solve::Exact); trainings.len()],
                     Some(problem) => knobs
@@ -334,9 +339,16 @@ fn tuning_folds(fine: &FineLevel, training: &[usize]) -> Vec<Vec<usize>> {
 /// Each training set's knobs: given, chosen over its folds (`folds[set]`, listed in the
 /// groups after the training sets, set by set), or the fallback when it has none.
 fn choose_knobs(rows: &Rows, sets: usize, folds: &[Vec<Vec<usize>>], config: &FittedConfig) -> Vec<Knobs> {
+    let fallback = |settled| Knobs {
+        neighbours: config.neighbours.or(FALLBACK_NEIGHBOURS),
+        ridge: config.ridge.or(FALLBACK_RIDGE),
+        settled,
+    };
+    if !config.chooses() {
+        return (0..sets).map(|_| fallback(Settled::Given)).collect();
+    }
     let ks = config.neighbours.values(&NEIGHBOUR_GRID);
     let ridges = config.ridge.values(&RIDGE_GRID);
-    let points: Vec<(usize, Real)> = ks.iter().flat_map(|&k| ridges.iter().map(move |&r| (k, r))).collect();
     // The set index of each training set's first fold among the listed sets.
     let mut first = Vec::with_capacity(sets);
     let mut next = sets;
@@ -346,65 +358,54 @@ fn choose_knobs(rows: &Rows, sets: usize, folds: &[Vec<Vec<usize>>], config: &Fi
     }
     let tuned: Vec<usize> = (0..sets).filter(|&s| folds[s].len() >= 2).collect();
     let sampled = rows.sampled(TUNING_ROWS);
-    let sse: Vec<Vec<Real>> = if tuned.is_empty() {
-        Vec::new()
-    } else {
+    let points = ks.len() * ridges.len();
+    // Per sampled row, per tuned set, the held-out error of every (k, ridge), k-major.
+    let per_row = |scratch: &mut Scratch, fine_idx: usize| -> Vec<Vec<Real>> {
         let widest = *ks.iter().max().expect("a grid");
-        sampled
-            .par_iter()
-            .map_init(
-                || Scratch::new(rows.fine.vertex_count),
-                |scratch, &fine_idx| {
-                    let problem =
-                        rows.problem(fine_idx, widest, scratch).expect("a sampled row is not coarse");
-                    tuned
-                        .iter()
-                        .map(|&set| {
-                            let (members, _) = &rows.groups.members[set];
-                            let mut sums = vec![0.0; points.len()];
-                            for fold in 0..folds[set].len() {
-                                let (test, tested) = &rows.groups.members[first[set] + fold];
-                                let train: Vec<usize> =
-                                    members.iter().copied().filter(|g| !test.contains(g)).collect();
-                                let trained = rows.groups.members[set].1 - tested;
-                                for (i, &(k, ridge)) in points.iter().enumerate() {
-                                    let positions = problem.positions(k);
-                                    let g = problem.gram(&train, &positions, trained as Real);
-                                    let (w, _) = solve_dense(&g, &problem.b(&positions), ridge);
-                                    let h = problem.gram(test, &positions, 1.0);
-                                    sums[i] += w.dot(&(&h * &w));
-                                }
-                            }
-                            sums
-                        })
-                        .collect::<Vec<_>>()
-                },
-            )
-            .collect::<Vec<Vec<Vec<Real>>>>()
-            // Summed in row order, whatever the thread count: the choice is deterministic.
-            .into_iter()
-            .fold(vec![vec![0.0; points.len()]; tuned.len()], |mut sum, row| {
-                sum.iter_mut().flatten().zip(row.iter().flatten()).for_each(|(s, x)| *s += x);
-                sum
+        let problem = rows.problem(fine_idx, widest, scratch).expect("a sampled row is not coarse");
+        tuned
+            .iter()
+            .map(|&set| {
+                let (members, poses) = &rows.groups.members[set];
+                let mut sums = vec![0.0; points];
+                for fold in 0..folds[set].len() {
+                    let (test, tested) = &rows.groups.members[first[set] + fold];
+                    let train: Vec<usize> = members.iter().copied().filter(|g| !test.contains(g)).collect();
+                    for (i, &k) in ks.iter().enumerate() {
+                        // What depends on (fold, k) only, once for every ridge.
+                        let positions = problem.positions(k);
+                        let g = problem.gram(&train, &positions, (poses - tested) as Real);
+                        let h = problem.gram(test, &positions, 1.0);
+                        let b = problem.b(&positions);
+                        for (j, &ridge) in ridges.iter().enumerate() {
+                            let (w, _) = solve_dense(&g, &b, ridge);
+                            sums[i * ridges.len() + j] += w.dot(&(&h * &w));
+                        }
+                    }
+                }
+                sums
             })
+            .collect()
     };
+    let sse: Vec<Vec<Real>> = sampled
+        .par_iter()
+        .map_init(|| Scratch::new(rows.fine.vertex_count()), |scratch, &fine_idx| per_row(scratch, fine_idx))
+        .collect::<Vec<_>>()
+        // Summed in row order, whatever the thread count: the choice is deterministic.
+        .into_iter()
+        .fold(vec![vec![0.0; points]; tuned.len()], |mut sum, row| {
+            sum.iter_mut().flatten().zip(row.iter().flatten()).for_each(|(s, x)| *s += x);
+            sum
+        });
     (0..sets)
         .map(|set| match tuned.iter().position(|&s| s == set) {
-            _ if !config.chooses() => Knobs {
-                neighbours: config.neighbours.or(FALLBACK_NEIGHBOURS),
-                ridge: config.ridge.or(FALLBACK_RIDGE),
-                settled: Settled::Given,
-            },
-            None => Knobs {
-                neighbours: config.neighbours.or(FALLBACK_NEIGHBOURS),
-                ridge: config.ridge.or(FALLBACK_RIDGE),
-                settled: Settled::TooFewPoses,
-            },
+            None => fallback(Settled::TooFewPoses),
             Some(t) => {
-                let grid: Vec<GridPoint> = points
+                let grid: Vec<GridPoint> = ks
                     .iter()
+                    .flat_map(|&k| ridges.iter().map(move |&r| (k, r)))
                     .zip(&sse[t])
-                    .map(|(&(neighbours, ridge), &sse)| GridPoint { neighbours, ridge, sse })
+                    .map(|((neighbours, ridge), &sse)| GridPoint { neighbours, ridge, sse })
                     .collect();
                 // The lowest error; ties to the earlier point (fewer neighbours, less ridge).
                 let best = grid.iter().fold(grid[0], |b, p| if p.sse < b.sse { *p } else { b });
@@ -443,7 +444,7 @@ impl<'a> Rows<'a> {
             Neighbourhood::Euclidean => Search::Grid(PointGrid::new(&coarse_template)),
             Neighbourhood::Geodesic => Search::Graph(EdgeGraph::new(template, fine.faces)),
         };
-        let mut fine_to_coarse = vec![u32::MAX; fine.vertex_count];
+        let mut fine_to_coarse = vec![u32::MAX; fine.vertex_count()];
         for (coarse_idx, &fine_idx) in coarse_to_fine.iter().enumerate() {
             fine_to_coarse[fine_idx as usize] = coarse_idx as u32;
         }
@@ -454,7 +455,7 @@ impl<'a> Rows<'a> {
     /// At most `count` fine vertices that are not coarse vertices, evenly strided.
     fn sampled(&self, count: usize) -> Vec<usize> {
         let free: Vec<usize> =
-            (0..self.fine.vertex_count).filter(|&i| self.fine_to_coarse[i] == u32::MAX).collect();
+            (0..self.fine.vertex_count()).filter(|&i| self.fine_to_coarse[i] == u32::MAX).collect();
         let stride = free.len().div_ceil(count.max(1)).max(1);
         free.into_iter().step_by(stride).collect()
     }
@@ -775,13 +776,7 @@ mod tests {
     use super::*;
 
     fn level(set: &PoseSet) -> FineLevel<'_> {
-        FineLevel {
-            poses: set,
-            orig: None,
-            template: set.template_positions(),
-            faces: &set.faces,
-            vertex_count: set.vertex_count(),
-        }
+        FineLevel { poses: set, orig: None, template: set.template_positions(), faces: &set.faces }
     }
 
     /// A fit's tuning folds hold out whole groups, never the template's, and only the

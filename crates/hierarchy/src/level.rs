@@ -132,13 +132,7 @@ pub(crate) fn build_level_per_mask(
     upsampler: &Upsampler,
 ) -> Result<Vec<Level>, HierarchyError> {
     let fine = input.fine;
-    let view = FineLevel {
-        poses: fine,
-        orig: None,
-        template: fine.template_positions(),
-        faces: &fine.faces,
-        vertex_count: fine.vertex_count(),
-    };
+    let view = FineLevel { poses: fine, orig: None, template: fine.template_positions(), faces: &fine.faces };
     build_levels(&view, input.coarse_to_fine, input.coarse_faces, masks, upsampler)
 }
 
@@ -155,12 +149,12 @@ pub(crate) fn build_levels(
     upsampler.validate()?;
     let pose_count = fine.poses.pose_count();
     for &training in masks {
-        check_input(fine.vertex_count, pose_count, coarse_to_fine, coarse_faces, training)?;
+        check_input(fine.vertex_count(), pose_count, coarse_to_fine, coarse_faces, training)?;
     }
     let trainings: Vec<Vec<usize>> =
         masks.iter().map(|mask| (0..pose_count).filter(|&p| mask[p]).collect()).collect();
 
-    let down = selection(coarse_to_fine, fine.vertex_count)?;
+    let down = selection(coarse_to_fine, fine.vertex_count())?;
     let template = fine.template;
     let coarse_template = TriMesh {
         positions: coarse_to_fine.iter().map(|&f| template[f as usize]).collect(),
@@ -193,7 +187,7 @@ pub(crate) fn build_levels(
             let up_max_row_sum_error = up.row_sums().iter().fold(0.0, |m: Real, s| m.max((s - 1.0).abs()));
             let report = LevelReport {
                 upsampler: upsampler.name(),
-                fine_vertices: fine.vertex_count,
+                fine_vertices: fine.vertex_count(),
                 coarse_vertices: n_coarse,
                 coarse_faces: coarse_faces.len(),
                 training_poses,

@@ -4,7 +4,7 @@
 use anyhow::{Result, bail};
 use desal_io::artifact::{ArtifactKind, ContentHash, MapV1, SimplifiedV1};
 use desal_map::{MapConfig, MapMode, MapOutput, MapReport, MappedTemplate, VertexMap};
-use desal_mesh::{PartLabels, PoseSet};
+use desal_mesh::{PartLabels, PoseSet, TriMesh};
 use serde::{Deserialize, Serialize};
 use serde_json::json;
 
@@ -70,33 +70,29 @@ fn check_made_from(simplified: &SimplifiedV1, set: &PoseSet) -> Result<()> {
 /// rule. Refuses a result of another pose set, and a mesh that does not lie on this
 /// template.
 pub fn map(simplified: &SimplifiedV1, set: &PoseSet, labels: &PartLabels) -> Result<MapOutput> {
-    check_made_from(simplified, set)?;
-    let kept = kept_orig(simplified);
-    let out = desal_map::map_pose_set(
-        &MapConfig::default(),
-        mode(kept.as_deref()),
-        &mesh(simplified),
-        set,
-        labels,
-    )?;
-    check_lies_on(&out.report, set)?;
-    Ok(out)
+    checked(simplified, set, labels, desal_map::map_pose_set, |out| &out.report)
 }
 
 /// [`map`] without applying the map to the poses: the map, the carried labels and the
 /// report, which is all the stage keeps (the simplified poses are gathered by [`apply`]
 /// when an output needs them).
 fn map_template(simplified: &SimplifiedV1, set: &PoseSet, labels: &PartLabels) -> Result<MappedTemplate> {
+    checked(simplified, set, labels, desal_map::map_template, |out| &out.report)
+}
+
+/// `run` (one of `desal_map`'s stage-4 entry points) on `simplified`, between the checks
+/// both of the above make: the result is of this pose set, and lies on its template.
+fn checked<T>(
+    simplified: &SimplifiedV1,
+    set: &PoseSet,
+    labels: &PartLabels,
+    run: impl FnOnce(&MapConfig, MapMode<'_>, &TriMesh, &PoseSet, &PartLabels) -> Result<T, desal_map::MapError>,
+    report: impl FnOnce(&T) -> &MapReport,
+) -> Result<T> {
     check_made_from(simplified, set)?;
     let kept = kept_orig(simplified);
-    let out = desal_map::map_template(
-        &MapConfig::default(),
-        mode(kept.as_deref()),
-        &mesh(simplified),
-        set,
-        labels,
-    )?;
-    check_lies_on(&out.report, set)?;
+    let out = run(&MapConfig::default(), mode(kept.as_deref()), &mesh(simplified), set, labels)?;
+    check_lies_on(report(&out), set)?;
     Ok(out)
 }
 
